@@ -1,0 +1,27 @@
+# meshplan: `make demo` and `make test` set up .venv from nothing and run.
+PYTHON ?= python3
+VENV   := .venv
+BIN    := $(VENV)/bin
+STAMP  := $(VENV)/.installed-stamp
+
+.PHONY: demo test bench clean lint
+
+$(STAMP): pyproject.toml
+	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
+	$(BIN)/python -m pip install --quiet --upgrade pip
+	$(BIN)/python -m pip install --quiet -e ".[test]"
+	touch $(STAMP)
+
+demo: $(STAMP)
+	$(BIN)/meshplan synth --preset apartment --seed 1 --output demo-out/scan --force
+	$(BIN)/meshplan run demo-out/scan/scan.obj --annotations demo-out/scan/annotations.json --output demo-out/plans --force
+	@echo "Plans, models and plan.json are in demo-out/plans/ (open drafting-0.png, pen-and-ink-0.png, report.html)."
+
+test: $(STAMP)
+	$(BIN)/python -m pytest -n 2 -q tests
+
+bench: $(STAMP)
+	$(BIN)/python benchmarks/bench.py
+
+clean:
+	rm -rf demo-out bench-out meshplan-out .pytest_cache .hypothesis

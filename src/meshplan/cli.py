@@ -1,0 +1,255 @@
+"""The ``meshplan`` command line: a thin layer over :func:`meshplan.run` and friends.
+
+Every user error is printed as one line, ``error: <problem>; <what to do>``, with exit status 2
+and no traceback. Progress goes to stderr (``--quiet`` silences it); ``--json`` prints the
+summary as JSON on stdout.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import sys
+from enum import Enum
+from pathlib import Path
+from typing import Any, Optional
+
+import click
+import typer
+
+from . import __version__
+from .errors import MeshplanError, ParameterError
+
+app = typer.Typer(
+    name="meshplan",
+    help="Turn a scanned triangle mesh of a building interior into an oriented 3D model and floor plans.",
+    add_completion=False,
+    no_args_is_help=True,
+    pretty_exceptions_enable=False,
+    rich_markup_mode=None,
+)
+
+
+class Up(str, Enum):
+    auto = "auto"
+    px = "+x"
+    nx = "-x"
+    py = "+y"
+    ny = "-y"
+    pz = "+z"
+    nz = "-z"
+
+
+class Units(str, Enum):
+    m = "m"
+    cm = "cm"
+    mm = "mm"
+    ft = "ft"
+    inch = "in"
+
+
+class Gravity(str, Enum):
+    kmeans = "kmeans"
+    bbox = "bbox"
+
+
+class Directions(str, Enum):
+    auto = "auto"
+    principal = "principal"
+    all = "all"
+
+
+def _d(name: str, text: str) -> str:
+    """Help text with the parameter's default, read from the stage that owns it."""
+    from .options import RunOptions
+
+    opts = RunOptions()
+    value = getattr(getattr(opts, RunOptions.names()[name]), name)
+    return f"{text} [default: {value}]"
+
+
+def _version(value: bool) -> None:
+    if value:
+        typer.echo(f"meshplan {__version__}")
+        raise typer.Exit()
+
+
+@app.callback()
+def _main(
+    version: bool = typer.Option(False, "--version", callback=_version, is_eager=True, help="Print the version and exit."),
+) -> None:
+    """meshplan: scanned mesh in, oriented model and floor plans out."""
+
+
+def _parse_set(items: list[str]) -> dict[str, Any]:
+    """``NAME=VALUE`` pairs, values parsed as JSON when they can be (numbers, true, lists)."""
+    out: dict[str, Any] = {}
+    for item in items:
+        if "=" not in item:
+            raise ParameterError(f"--set {item!r} is not NAME=VALUE", "write e.g. --set gravity_plane_fit=false")
+        name, value = item.split("=", 1)
+        try:
+            parsed = json.loads(value)
+        except json.JSONDecodeError:
+            parsed = value
+        out[name.strip().replace("-", "_")] = tuple(parsed) if isinstance(parsed, list) else parsed
+    return out
+
+
+def _setup_logging(verbose: int, quiet: bool) -> None:
+    level = logging.WARNING
+    if verbose >= 1:
+        level = logging.DEBUG
+    if quiet:
+        level = logging.ERROR
+    logging.basicConfig(level=level, format="%(levelname)s %(name)s: %(message)s", stream=sys.stderr, force=True)
+
+
+@app.command()
+def run(
+    scan: Path = typer.Argument(..., help="Scanned mesh: OBJ, PLY, GLB/glTF, STL or OFF."),
+    output: Optional[Path] = typer.Option(None, "--output", "-o", help="Output directory [default: ./meshplan-out/<scan name>]."),
+    annotations: Optional[Path] = typer.Option(None, "--annotations", "-a", help="Annotations JSON (input coordinates)."),
+    force: bool = typer.Option(False, "--force", "-f", help="Replace an existing output directory."),
+    units: Optional[Units] = typer.Option(None, "--units", help=_d("units", "Unit of the scan's coordinates.")),
+    up: Optional[Up] = typer.Option(None, "--up", help=_d("up", "Input axis that is roughly up, or auto.")),
+    gravity: Optional[Gravity] = typer.Option(None, "--gravity", help=_d("gravity_method", "kmeans (paper's Method 2) or bbox (Method 1).")),
+    slices: Optional[int] = typer.Option(None, "--slices", help=_d("slices", "Slicing intervals of the pen-and-ink plan (n + 1 planes).")),
+    opacity: Optional[float] = typer.Option(None, "--opacity", help=_d("opacity", "Opacity of each pen-and-ink slice.")),
+    imperial: Optional[bool] = typer.Option(None, "--imperial/--metric", help=_d("imperial", "Scale bars and areas in feet (or metres).")),
+    scale: Optional[int] = typer.Option(None, "--scale", help=_d("scale", "Drawing scale 1:N (0 = automatic).")),
+    dpi: Optional[int] = typer.Option(None, "--dpi", help=_d("dpi", "PNG resolution (dots per inch).")),
+    drafting_height: Optional[float] = typer.Option(None, "--drafting-height", help=_d("drafting_height_m", "Cut height of the drafting plan above the floor (m).")),
+    box_length: Optional[float] = typer.Option(None, "--box-length", help=_d("box_length_m", "DBSCAN box along the wall (m; paper: 1.5 ft).")),
+    box_depth: Optional[float] = typer.Option(None, "--box-depth", help=_d("box_depth_m", "DBSCAN box across the wall (m; paper: a few inches).")),
+    box_height: Optional[float] = typer.Option(None, "--box-height", help="DBSCAN box height (m) [default: the story's floor-to-ceiling height]."),
+    min_points: Optional[int] = typer.Option(None, "--min-points", help=_d("min_points", "DBSCAN minimum points in a box.")),
+    wall_directions: Optional[Directions] = typer.Option(None, "--wall-directions", help=_d("wall_directions", "principal (k = 4), all, or auto.")),
+    min_wall_length: Optional[float] = typer.Option(None, "--min-wall-length", help=_d("min_wall_length_m", "Shortest flat wall kept (m).")),
+    floor_reach: Optional[float] = typer.Option(None, "--floor-reach", help=_d("floor_reach_m", "A wall must come this close to the floor (m).")),
+    ceiling_reach: Optional[float] = typer.Option(None, "--ceiling-reach", help=_d("ceiling_reach_m", "A wall must come this close to the ceiling (m).")),
+    min_room_height: Optional[float] = typer.Option(None, "--min-room-height", help=_d("min_room_height_m", "Smallest floor-to-ceiling gap of a story (m).")),
+    default_ceiling_height: Optional[float] = typer.Option(None, "--default-ceiling-height", help=_d("default_ceiling_height_m", "Ceiling height assumed when none is scanned (m).")),
+    max_faces: Optional[int] = typer.Option(None, "--max-faces", help="Refuse larger scans [default: what fits in memory]."),
+    set_: list[str] = typer.Option([], "--set", help="Any other parameter, NAME=VALUE (see plan.json 'parameters')."),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="Print nothing but errors."),
+    as_json: bool = typer.Option(False, "--json", help="Print the summary as JSON on stdout."),
+    verbose: int = typer.Option(0, "--verbose", "-v", count=True, help="Debug logging."),
+) -> None:
+    """Orient a scan, split it into stories and draw its floor plans."""
+    from .pipeline import default_output_dir
+    from .pipeline import run as run_pipeline
+
+    _setup_logging(verbose, quiet)
+    params: dict[str, Any] = dict(
+        units=units.value if units else None,
+        up=up.value if up else None,
+        gravity_method=gravity.value if gravity else None,
+        slices=slices,
+        opacity=opacity,
+        imperial=imperial,
+        scale=scale,
+        dpi=dpi,
+        drafting_height_m=drafting_height,
+        box_length_m=box_length,
+        box_depth_m=box_depth,
+        box_height_m=box_height,
+        min_points=min_points,
+        wall_directions=wall_directions.value if wall_directions else None,
+        min_wall_length_m=min_wall_length,
+        floor_reach_m=floor_reach,
+        ceiling_reach_m=ceiling_reach,
+        min_room_height_m=min_room_height,
+        default_ceiling_height_m=default_ceiling_height,
+        max_faces=max_faces,
+    )
+    params = {k: v for k, v in params.items() if v is not None}
+    params.update(_parse_set(set_))
+    out = output if output is not None else default_output_dir(scan)
+    from .progress import StageProgress
+
+    with StageProgress(enabled=not quiet and not as_json) as progress:
+        result = run_pipeline(scan, annotations=annotations, output=out, force=force, progress=progress.update, **params)
+    for w in result.warnings:
+        logging.getLogger("meshplan").warning(w)
+    if as_json:
+        typer.echo(json.dumps(result.summary(), indent=2))
+    elif not quiet:
+        from .progress import print_summary
+
+        print_summary(result)
+
+
+@app.command()
+def synth(
+    output: Path = typer.Option(..., "--output", "-o", help="Directory to write the scan, annotations.json and truth.json to."),
+    preset: str = typer.Option("apartment", "--preset", help="room, apartment, office or multistory."),
+    seed: int = typer.Option(0, "--seed", help="Random seed (same seed, same scan)."),
+    fmt: str = typer.Option("obj", "--format", help="Scan file format: obj, ply, glb, stl or off."),
+    stories: Optional[int] = typer.Option(None, "--stories", help="Stories of the multistory preset (2 or 3)."),
+    target_faces: Optional[int] = typer.Option(None, "--target-faces", help="Aim at about this many faces."),
+    z_up: bool = typer.Option(False, "--z-up", help="Write the scan z-up."),
+    tilt: Optional[float] = typer.Option(None, "--tilt", help="Tilt in degrees [default: random up to 6]."),
+    yaw: Optional[float] = typer.Option(None, "--yaw", help="Yaw in degrees [default: random]."),
+    force: bool = typer.Option(False, "--force", "-f", help="Replace an existing output directory."),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="Print nothing but errors."),
+) -> None:
+    """Write a synthetic scan with exact ground truth (for tests, benchmarks and demos)."""
+    from .export.synth import write_synthetic
+    from .synthetic import SynthParams, generate
+
+    kw: dict[str, Any] = dict(preset=preset, seed=seed, z_up=z_up)
+    for k, v in (("stories", stories), ("target_faces", target_faces), ("tilt_deg", tilt), ("yaw_deg", yaw)):
+        if v is not None:
+            kw[k] = v
+    scan = generate(SynthParams(**kw))
+    path = write_synthetic(scan, output, fmt, force=force)
+    if not quiet:
+        typer.echo(f"wrote {path} ({scan.mesh.n_faces:,} faces), {output / 'annotations.json'} and {output / 'truth.json'}")
+
+
+@app.command()
+def schema() -> None:
+    """Print the JSON Schema of plan.json."""
+    from .export import plan_schema
+
+    typer.echo(json.dumps(plan_schema(), indent=2))
+
+
+def _usage_error_types() -> tuple[type[BaseException], ...]:
+    """Command-line usage errors of typer (which ships its own copy of click) and of click."""
+    types: list[type[BaseException]] = [click.ClickException]
+    for name in ("TyperException",):
+        if hasattr(typer, name):
+            types.append(getattr(typer, name))
+    return tuple(types)
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of the ``meshplan`` console script; returns the exit status."""
+    try:
+        app(args=argv, prog_name="meshplan", standalone_mode=False)
+    except MeshplanError as exc:
+        click.echo(f"error: {exc.message}", err=True)
+        return exc.exit_code
+    except (typer.Exit, click.exceptions.Exit) as exc:
+        return int(getattr(exc, "exit_code", 0) or 0)
+    except (KeyboardInterrupt, typer.Abort, click.exceptions.Abort):
+        click.echo("error: interrupted; nothing was written", err=True)
+        return 130
+    except _usage_error_types() as exc:
+        if type(exc).__name__.startswith("NoArgsIsHelp"):
+            ctx = getattr(exc, "ctx", None)
+            click.echo(ctx.get_help() if ctx is not None else "usage: meshplan COMMAND --help")
+            return 0
+        message = exc.format_message() if hasattr(exc, "format_message") else str(exc)
+        message = " ".join(str(message).split()).replace("Value error, ", "").rstrip(".")
+        ctx = getattr(exc, "ctx", None)
+        cmd = ctx.command_path if ctx is not None else "meshplan"
+        click.echo(f"error: {message}; see '{cmd} --help'", err=True)
+        return 2
+    return 0
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

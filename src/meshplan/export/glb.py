@@ -1,0 +1,58 @@
+"""Binary glTF (GLB) models for viewers: the oriented mesh, each story without its ceiling, the
+flat walls, and the annotations as small coloured markers with their probes."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..geometry import Annotations, Mesh
+
+#: RGBA colour of each annotation kind.
+KIND_RGBA = {
+    "sensor": (214, 39, 40, 255),
+    "thermostat": (255, 127, 14, 255),
+    "door": (140, 86, 75, 255),
+    "window": (31, 119, 180, 255),
+    "other": (148, 103, 189, 255),
+}
+MESH_RGBA = (200, 200, 200, 255)
+WALL_RGBA = (230, 225, 210, 255)
+
+
+def _trimesh(mesh: Mesh, rgba):
+    import trimesh
+
+    tm = trimesh.Trimesh(mesh.vertices, mesh.faces, process=False)
+    tm.visual = trimesh.visual.ColorVisuals(tm, face_colors=np.tile(np.array(rgba, dtype=np.uint8), (len(mesh.faces), 1)))
+    return tm
+
+
+def annotation_markers(annotations: Annotations, radius_m: float = 0.06, probe_m: float = 0.35):
+    """``(name, trimesh.Trimesh)`` markers: a sphere per annotation and a thin cylinder along
+    its probe direction."""
+    import trimesh
+
+    out = []
+    for i, (label, kind) in enumerate(zip(annotations.labels, annotations.kinds)):
+        p = annotations.positions[i]
+        parts = [trimesh.creation.icosphere(subdivisions=2, radius=radius_m).apply_translation(p)]
+        d = annotations.directions[i]
+        if np.all(np.isfinite(d)):
+            seg = np.array([p, p + probe_m * d])
+            parts.append(trimesh.creation.cylinder(radius=radius_m / 4, segment=seg, sections=8))
+        m = trimesh.util.concatenate(parts)
+        m.visual = trimesh.visual.ColorVisuals(m, face_colors=np.tile(np.array(KIND_RGBA.get(kind, KIND_RGBA["other"]), dtype=np.uint8), (len(m.faces), 1)))
+        out.append((f"{label} ({kind})", m))
+    return out
+
+
+def glb_bytes(mesh: Mesh, annotations: Annotations | None = None, name: str = "scan", rgba=MESH_RGBA) -> bytes:
+    """A GLB scene holding ``mesh`` and the annotation markers (plan frame, y up as glTF wants)."""
+    import trimesh
+
+    scene = trimesh.Scene()
+    if mesh.n_faces:
+        scene.add_geometry(_trimesh(mesh, rgba), node_name=name, geom_name=name)
+    for marker_name, marker in annotation_markers(annotations or Annotations()):
+        scene.add_geometry(marker, node_name=marker_name, geom_name=marker_name)
+    return scene.export(file_type="glb")

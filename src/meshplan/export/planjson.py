@@ -1,0 +1,102 @@
+"""plan.json: the results file every later stage, test and user reads.
+
+Its JSON Schema ships with the package (``meshplan/schema/plan.schema.json``). Everything in it
+is in the plan frame (metres, +y up, dominant walls along x and z) except ``transform``, which
+maps input coordinates to that frame, and ``input``, which describes the file. Floats are
+rounded (to 0.1 mm for coordinates) so that the same input and options give byte-identical
+files; only the ``timings`` block changes from run to run.
+"""
+
+from __future__ import annotations
+
+import json
+from importlib import resources
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from .._version import __version__
+
+if TYPE_CHECKING:  # pragma: no cover
+    from ..pipeline import Result
+
+SCHEMA_ID = "https://meshplan.org/schema/plan/1"
+_ND = 6  # digits kept for transforms and directions
+_NC = 4  # digits kept for coordinates (0.1 mm)
+
+
+def _r(a: Any, nd: int = _NC) -> Any:
+    out = np.round(np.asarray(a, dtype=np.float64), nd)
+    out = out + 0.0  # no negative zeros
+    return out.tolist()
+
+
+def plan_document(result: Result) -> dict[str, Any]:
+    """The content of plan.json for a result (see the JSON Schema for every field)."""
+    o = result.orientation
+    st = result.input
+    doc: dict[str, Any] = {
+        "$schema": SCHEMA_ID,
+        "meshplan_version": __version__,
+        "frame": {
+            "units": "m",
+            "up": "+y",
+            "plan": "seen from above: x to the right, z down the page",
+            "origin": "lowest floor, at the low-x, low-z corner of the scan",
+        },
+        "transform": _r(o.transform, _ND),
+        "stories": [s.to_dict(_NC) for s in o.stories],
+        "wall_directions": [
+            {
+                "normal": _r(d.normal[[0, 2]], _ND),
+                "angle_deg": round(float(np.degrees(np.arctan2(d.normal[2], d.normal[0])) % 360.0), 3) % 360.0,
+                "area": round(float(d.weight), 3),
+                "principal": bool(d.principal),
+            }
+            for d in o.alignment.directions
+        ],
+        "walls": result.walls.to_list(_NC),
+        "annotations": [
+            dict(item, story=int(result.annotation_story[i]))
+            for i, item in enumerate(result.annotations.to_list(_NC))
+        ],
+        "levels": {
+            "bucket_m": round(float(result.options.orient.level_bucket_m), _ND),
+            "spikes": [{"height": round(s.height, _NC), "area": round(s.weight, 3)} for s in o.levels.spikes],
+        },
+        "gravity": {
+            "method": o.gravity.method,
+            "sign_evidence": round(float(o.gravity.sign_evidence), 3),
+            "faces_used": int(o.gravity.faces_used),
+        },
+        "input": {
+            "path": st.path,
+            "format": st.format,
+            "units": st.units,
+            "objects": st.objects,
+            "vertices_read": st.vertices_read,
+            "faces_read": st.faces_read,
+            "vertices": st.vertices,
+            "faces": st.faces,
+            "dropped_faces": st.dropped_faces,
+            "dropped_nonfinite": st.dropped_nonfinite,
+            "dropped_degenerate": st.dropped_degenerate,
+            "dropped_duplicate": st.dropped_duplicate,
+            "faces_flipped": int(np.count_nonzero(o.flipped)),
+        },
+        "warnings": list(result.warnings),
+        "parameters": result.options.to_dict(),
+        "timings": {k: round(float(v), 4) for k, v in result.timings.items()},
+    }
+    return doc
+
+
+def dumps(doc: dict[str, Any]) -> str:
+    """Serialize deterministically (stable key order, no NaN)."""
+    return json.dumps(doc, indent=2, allow_nan=False) + "\n"
+
+
+def plan_schema() -> dict[str, Any]:
+    """The JSON Schema of plan.json."""
+    text = resources.files("meshplan").joinpath("schema/plan.schema.json").read_text(encoding="utf-8")
+    return json.loads(text)

@@ -1,0 +1,289 @@
+"""Core geometric data: triangle meshes, annotations and rigid transforms.
+
+Like trimesh, meshplan keeps plain numpy arrays at its core and derives per-face quantities
+(normals, areas, centroids) lazily, once. Unlike trimesh, a :class:`Mesh` is immutable: every
+stage returns a new mesh, so a stage can never change what another stage sees.
+
+Conventions
+-----------
+* Coordinates are float64 metres. The *plan frame* has +y up (against gravity) and the dominant
+  walls along x and z.
+* Transforms are 4x4 homogeneous matrices acting on column vectors: ``p' = M @ [p, 1]``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from functools import cached_property
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .errors import ParameterError
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
+#: The kinds of annotated object meshplan knows about.
+ANNOTATION_KINDS = ("sensor", "thermostat", "window", "door", "other")
+
+
+def _frozen(a: np.ndarray) -> np.ndarray:
+    a.flags.writeable = False
+    return a
+
+
+@dataclass(frozen=True, eq=False)
+class Mesh:
+    """An immutable triangle mesh with lazily computed per-face quantities.
+
+    Parameters
+    ----------
+    vertices
+        ``(V, 3)`` vertex positions.
+    faces
+        ``(F, 3)`` vertex indices of each triangle, counter-clockwise seen from the side the
+        normal points to.
+    """
+
+    vertices: FloatArray
+    faces: IntArray
+
+    def __post_init__(self) -> None:
+        v = np.array(self.vertices, dtype=np.float64, copy=True).reshape(-1, 3)
+        f = np.array(self.faces, dtype=np.int64, copy=True).reshape(-1, 3)
+        if len(f) and (f.min() < 0 or f.max() >= len(v)):
+            raise ValueError("face index out of range")
+        object.__setattr__(self, "vertices", _frozen(v))
+        object.__setattr__(self, "faces", _frozen(f))
+
+    @property
+    def n_faces(self) -> int:
+        return int(len(self.faces))
+
+    @property
+    def n_vertices(self) -> int:
+        return int(len(self.vertices))
+
+    @cached_property
+    def triangles(self) -> FloatArray:
+        """``(F, 3, 3)`` corner positions of every face."""
+        return _frozen(self.vertices[self.faces])
+
+    @cached_property
+    def _cross(self) -> FloatArray:
+        t = self.triangles
+        return _frozen(np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]))
+
+    @cached_property
+    def face_areas(self) -> FloatArray:
+        """``(F,)`` triangle areas."""
+        return _frozen(0.5 * np.sqrt(np.einsum("ij,ij->i", self._cross, self._cross)))
+
+    @cached_property
+    def face_normals(self) -> FloatArray:
+        """``(F, 3)`` unit normals (right-hand rule); zero for degenerate faces."""
+        norm = 2.0 * self.face_areas
+        with np.errstate(invalid="ignore", divide="ignore"):
+            n = self._cross / norm[:, None]
+        n[~(norm > 0)] = 0.0
+        return _frozen(n)
+
+    @cached_property
+    def face_centroids(self) -> FloatArray:
+        """``(F, 3)`` triangle centroids."""
+        return _frozen(self.triangles.mean(axis=1))
+
+    @property
+    def area(self) -> float:
+        return float(self.face_areas.sum())
+
+    def bounds(self) -> FloatArray:
+        """``(2, 3)`` axis-aligned bounds of the referenced vertices."""
+        if not len(self.faces):
+            return np.zeros((2, 3))
+        used = self.vertices[np.unique(self.faces)]
+        return np.stack([used.min(axis=0), used.max(axis=0)])
+
+    def transformed(self, matrix: ArrayLike) -> Mesh:
+        """The mesh with ``matrix`` (4x4, rigid or not) applied to its vertices."""
+        m = np.asarray(matrix, dtype=np.float64)
+        out = Mesh(transform_points(m, self.vertices), self.faces)
+        if np.linalg.det(m[:3, :3]) < 0:  # keep normals pointing the same way
+            out = Mesh(out.vertices, out.faces[:, ::-1])
+        return out
+
+    def submesh(self, faces: ArrayLike) -> Mesh:
+        """A compact mesh made of the selected faces (boolean mask or indices)."""
+        sel = self.faces[np.asarray(faces)]
+        used, inverse = np.unique(sel, return_inverse=True)
+        return Mesh(self.vertices[used], inverse.reshape(-1, 3))
+
+    def with_flipped(self, flip: ArrayLike) -> Mesh:
+        """The mesh with the winding (and so the normal) of the selected faces reversed."""
+        flip = np.asarray(flip, dtype=bool)
+        faces = self.faces.copy()
+        faces[flip] = faces[flip][:, ::-1]
+        return Mesh(self.vertices, faces)
+
+    @staticmethod
+    def concatenate(meshes: list[Mesh]) -> Mesh:
+        """One mesh made of several."""
+        if not meshes:
+            return Mesh(np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64))
+        offsets = np.cumsum([0] + [m.n_vertices for m in meshes[:-1]])
+        return Mesh(
+            np.concatenate([m.vertices for m in meshes]),
+            np.concatenate([m.faces + o for m, o in zip(meshes, offsets)]),
+        )
+
+
+@dataclass(frozen=True, eq=False)
+class Annotations:
+    """Objects placed by the user in the scan: sensors, thermostats, doors, windows.
+
+    Parameters
+    ----------
+    labels, kinds
+        One entry per object; ``kinds`` are from :data:`ANNOTATION_KINDS`.
+    positions
+        ``(N, 3)`` positions.
+    directions
+        ``(N, 3)`` unit "probe" directions, NaN where the object has none.
+    """
+
+    labels: tuple[str, ...] = ()
+    kinds: tuple[str, ...] = ()
+    positions: FloatArray = field(default_factory=lambda: np.zeros((0, 3)))
+    directions: FloatArray = field(default_factory=lambda: np.zeros((0, 3)))
+
+    def __post_init__(self) -> None:
+        p = np.array(self.positions, dtype=np.float64, copy=True).reshape(-1, 3)
+        d = np.array(self.directions, dtype=np.float64, copy=True).reshape(-1, 3)
+        n = len(self.labels)
+        if not (len(self.kinds) == len(p) == len(d) == n):
+            raise ValueError("annotation arrays differ in length")
+        bad = [k for k in self.kinds if k not in ANNOTATION_KINDS]
+        if bad:
+            raise ValueError(f"unknown annotation kind {bad[0]!r}")
+        with np.errstate(invalid="ignore", divide="ignore"):
+            d = d / np.linalg.norm(d, axis=1, keepdims=True)
+        object.__setattr__(self, "labels", tuple(self.labels))
+        object.__setattr__(self, "kinds", tuple(self.kinds))
+        object.__setattr__(self, "positions", _frozen(p))
+        object.__setattr__(self, "directions", _frozen(d))
+
+    def __len__(self) -> int:
+        return len(self.labels)
+
+    def transformed(self, matrix: ArrayLike) -> Annotations:
+        """The annotations with a rigid ``matrix`` applied (positions moved, directions turned)."""
+        m = np.asarray(matrix, dtype=np.float64)
+        return Annotations(
+            self.labels,
+            self.kinds,
+            transform_points(m, self.positions),
+            transform_directions(m, self.directions),
+        )
+
+    def to_list(self, ndigits: int = 6) -> list[dict]:
+        """JSON-ready list: ``label``, ``kind``, ``position`` and, where given, ``direction``."""
+        out = []
+        for i, (label, kind) in enumerate(zip(self.labels, self.kinds)):
+            item = {"label": label, "kind": kind, "position": _round_list(self.positions[i], ndigits)}
+            if np.all(np.isfinite(self.directions[i])):
+                item["direction"] = _round_list(self.directions[i], ndigits)
+            out.append(item)
+        return out
+
+
+def _round_list(a: ArrayLike, ndigits: int) -> list:
+    return np.round(np.asarray(a, dtype=np.float64), ndigits).tolist()
+
+
+# --------------------------------------------------------------------------------------------
+# Rigid transforms
+
+
+def homogeneous(rotation: ArrayLike | None = None, translation: ArrayLike | None = None) -> FloatArray:
+    """A 4x4 matrix from a 3x3 rotation and a translation."""
+    m = np.eye(4)
+    if rotation is not None:
+        m[:3, :3] = rotation
+    if translation is not None:
+        m[:3, 3] = translation
+    return m
+
+
+def transform_points(matrix: ArrayLike, points: ArrayLike) -> FloatArray:
+    m = np.asarray(matrix, dtype=np.float64)
+    p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+    return p @ m[:3, :3].T + m[:3, 3]
+
+
+def transform_directions(matrix: ArrayLike, directions: ArrayLike) -> FloatArray:
+    m = np.asarray(matrix, dtype=np.float64)
+    return np.asarray(directions, dtype=np.float64).reshape(-1, 3) @ m[:3, :3].T
+
+
+def rotation_between(a: ArrayLike, b: ArrayLike) -> FloatArray:
+    """The smallest rotation (3x3) turning unit vector ``a`` onto unit vector ``b``."""
+    a = np.asarray(a, dtype=np.float64) / np.linalg.norm(a)
+    b = np.asarray(b, dtype=np.float64) / np.linalg.norm(b)
+    axis = np.cross(a, b)
+    s, c = np.linalg.norm(axis), float(np.dot(a, b))
+    if s < 1e-12:
+        if c > 0:
+            return np.eye(3)
+        # half turn about any axis perpendicular to a
+        perp = np.cross(a, [1.0, 0.0, 0.0] if abs(a[0]) < 0.9 else [0.0, 1.0, 0.0])
+        return rotation_about_axis(perp, np.pi)
+    return rotation_about_axis(axis, np.arctan2(s, c))
+
+
+def rotation_about_axis(axis: ArrayLike, angle: float) -> FloatArray:
+    """Rodrigues' rotation matrix for ``angle`` radians about ``axis`` (right-hand rule)."""
+    k = np.asarray(axis, dtype=np.float64)
+    k = k / np.linalg.norm(k)
+    kx = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
+    return np.eye(3) + np.sin(angle) * kx + (1 - np.cos(angle)) * (kx @ kx)
+
+
+def rotation_about_y(angle: float) -> FloatArray:
+    """Rotation (3x3) by ``angle`` radians about +y; turns +x towards -z."""
+    return rotation_about_axis([0.0, 1.0, 0.0], angle)
+
+
+def is_rigid(matrix: ArrayLike, tol: float = 1e-6) -> bool:
+    """True when ``matrix`` is a proper rigid transform (rotation with det +1, translation)."""
+    m = np.asarray(matrix, dtype=np.float64)
+    if m.shape != (4, 4) or not np.all(np.isfinite(m)):
+        return False
+    r = m[:3, :3]
+    return (
+        np.allclose(r @ r.T, np.eye(3), atol=tol)
+        and abs(np.linalg.det(r) - 1) < tol
+        and np.allclose(m[3], [0, 0, 0, 1], atol=tol)
+    )
+
+
+def azimuth_deg(nx: ArrayLike, nz: ArrayLike) -> FloatArray:
+    """Angle of the plan direction ``(nx, nz)`` from +x towards +z, in [0, 360) degrees."""
+    return np.degrees(np.arctan2(nz, nx)) % 360.0
+
+
+def unit(v: ArrayLike, axis: int = -1) -> FloatArray:
+    v = np.asarray(v, dtype=np.float64)
+    n = np.linalg.norm(v, axis=axis, keepdims=True)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(n > 0, v / n, 0.0)
+
+
+def check_positive(name: str, value: float, allow_zero: bool = False) -> None:
+    """Raise :class:`ParameterError` unless ``value`` is a finite positive number."""
+    ok = np.isfinite(value) and (value >= 0 if allow_zero else value > 0)
+    if not ok:
+        raise ParameterError(
+            f"{name} must be {'non-negative' if allow_zero else 'positive'}, got {value!r}",
+            f"pass a {'non-negative' if allow_zero else 'positive'} number",
+        )

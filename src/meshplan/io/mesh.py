@@ -1,0 +1,306 @@
+"""Reading scanned meshes into plain arrays, with the clean-up every scan needs.
+
+Formats are read by trimesh: OBJ (including the multi-object exports of the HoloLens Device
+Portal), PLY (ascii and binary), GLB/glTF (the scene graph flattened with its node transforms),
+STL and OFF. Whatever the file holds is flattened into one :class:`~meshplan.geometry.Mesh` in
+metres, and the faces that cannot be used are dropped and counted:
+
+* faces touching a vertex with a NaN or infinite coordinate,
+* degenerate faces (a repeated vertex, or an area below ``1e-12`` m2),
+* duplicate faces (the same three vertices, in any order), keeping the first.
+
+Vertices at exactly the same position are merged, so that faces of one surface are connected
+even when an exporter wrote each object with its own vertices.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import struct
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import InputError, ParameterError
+from ..geometry import Mesh
+
+#: File extensions meshplan reads, with the trimesh file type for each.
+MESH_FORMATS = {".obj": "obj", ".ply": "ply", ".glb": "glb", ".gltf": "gltf", ".stl": "stl", ".off": "off"}
+
+#: Length units accepted by ``--units``, in metres.
+UNITS_M = {"m": 1.0, "cm": 0.01, "mm": 0.001, "ft": 0.3048, "in": 0.0254}
+
+#: Peak memory meshplan needs per input face, measured on the 3-million-face benchmark
+#: (about 0.9 kB/face including the plans); used to refuse meshes that cannot fit up front.
+BYTES_PER_FACE = 1000
+
+#: Smallest triangle area kept, in square metres (after unit conversion).
+MIN_FACE_AREA_M2 = 1e-12
+
+
+@dataclass(frozen=True)
+class LoadStats:
+    """What was read from the input file and what was dropped."""
+
+    path: str
+    format: str
+    units: str
+    scale_to_m: float
+    objects: int
+    vertices_read: int
+    faces_read: int
+    dropped_nonfinite: int
+    dropped_degenerate: int
+    dropped_duplicate: int
+    vertices: int
+    faces: int
+
+    @property
+    def dropped_faces(self) -> int:
+        return self.dropped_nonfinite + self.dropped_degenerate + self.dropped_duplicate
+
+    def to_dict(self) -> dict:
+        d = asdict(self)
+        d["dropped_faces"] = self.dropped_faces
+        return d
+
+
+@dataclass(frozen=True, eq=False)
+class LoadedMesh:
+    mesh: Mesh
+    stats: LoadStats
+
+
+def check_units(units: str) -> float:
+    """Metres per input unit, or a :class:`ParameterError` naming the accepted units."""
+    if units not in UNITS_M:
+        raise ParameterError(
+            f"unknown unit {units!r}", f"use one of {', '.join(UNITS_M)} with --units"
+        )
+    return UNITS_M[units]
+
+
+def check_mesh_path(path: str | os.PathLike) -> tuple[Path, str]:
+    """The path and trimesh file type, after checking that the file can be a mesh at all."""
+    p = Path(path)
+    if not p.exists():
+        raise InputError(f"{p}: file not found", "check the path of the scan")
+    if p.is_dir():
+        raise InputError(f"{p}: is a directory, not a mesh file", "give the path of an OBJ, PLY, GLB, glTF, STL or OFF file")
+    ext = p.suffix.lower()
+    if ext not in MESH_FORMATS:
+        raise InputError(
+            f"{p}: unknown mesh format {ext or '(no extension)'!r}",
+            "convert the scan to OBJ, PLY, GLB, glTF, STL or OFF",
+        )
+    try:
+        size = p.stat().st_size
+        with open(p, "rb"):
+            pass
+    except OSError as exc:
+        raise InputError(f"{p}: cannot be read ({exc.strerror})", "check the file's permissions") from None
+    if size == 0:
+        raise InputError(f"{p}: the file is empty", "export the scan again")
+    return p, MESH_FORMATS[ext]
+
+
+def estimate_faces(path: Path, file_type: str) -> int | None:
+    """The number of faces a file declares, read from its header without loading it.
+
+    ``None`` when the format has no cheap count (OBJ, glTF); OBJ is then estimated from the
+    file size by the caller.
+    """
+    try:
+        with open(path, "rb") as fh:
+            head = fh.read(65536)
+        if file_type == "ply":
+            text = head.split(b"end_header", 1)[0].decode("ascii", "replace")
+            for line in text.splitlines():
+                parts = line.split()
+                if len(parts) == 3 and parts[0] == "element" and parts[1] == "face":
+                    return int(parts[2])
+            return 0
+        if file_type == "stl" and len(head) >= 84 and not head[:5].lower().startswith(b"solid"):
+            return struct.unpack("<I", head[80:84])[0]
+        if file_type == "off":
+            lines = [ln for ln in head.decode("ascii", "replace").splitlines() if ln.strip() and not ln.startswith("#")]
+            first = lines[0].split()
+            counts = first[1:] if first[0].upper().endswith("OFF") and len(first) > 1 else lines[1].split()
+            return int(counts[1])
+        if file_type == "glb" and head[:4] == b"glTF":
+            length = struct.unpack("<I", head[12:16])[0]
+            doc = json.loads(head[20 : 20 + length])
+            total = 0
+            for mesh in doc.get("meshes", []):
+                for prim in mesh.get("primitives", []):
+                    if "indices" in prim:
+                        total += doc["accessors"][prim["indices"]]["count"] // 3
+            return total
+    except Exception:
+        return None
+    return None
+
+
+def available_memory_bytes() -> int | None:
+    """Memory the process can still use, from /proc/meminfo (Linux) or sysconf."""
+    try:
+        with open("/proc/meminfo") as fh:
+            for line in fh:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except OSError:
+        pass
+    try:
+        return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    except (ValueError, OSError, AttributeError):
+        return None
+
+
+def check_size(path: Path, file_type: str, max_faces: int | None) -> int:
+    """Refuse, before loading, a mesh that cannot fit in memory (or exceeds ``max_faces``)."""
+    faces = estimate_faces(path, file_type)
+    if faces is None:
+        # OBJ and glTF: a face line or index triple takes at least ~20 bytes
+        faces = path.stat().st_size // 20 if file_type == "obj" else 0
+    need = faces * BYTES_PER_FACE
+    if max_faces is None:
+        avail = available_memory_bytes()
+        if avail is not None and need > avail:
+            raise InputError(
+                f"{path}: about {faces:,} faces would need about {need / 1e9:.1f} GB of memory "
+                f"and {avail / 1e9:.1f} GB are available",
+                f"decimate the scan, or pass --max-faces {faces} to try anyway",
+            )
+    elif faces > max_faces:
+        raise InputError(
+            f"{path}: about {faces:,} faces, more than --max-faces {max_faces:,} "
+            f"(it would need about {need / 1e9:.1f} GB of memory)",
+            f"decimate the scan, or raise --max-faces to {faces}",
+        )
+    return faces
+
+
+def _read_with_trimesh(path: Path, file_type: str) -> tuple[np.ndarray, np.ndarray, int]:
+    import trimesh
+
+    try:
+        # OBJ: one geometry per object, as HoloLens exports write one object per surface patch
+        extra = {"split_objects": True, "group_material": False} if file_type == "obj" else {}
+        loaded = trimesh.load(str(path), file_type=file_type, process=False, force=None, **extra)
+    except Exception as exc:  # trimesh raises many types for broken files
+        reason = str(exc).splitlines()[0][:120] if str(exc) else type(exc).__name__
+        raise InputError(
+            f"{path}: cannot be read as {file_type.upper()} ({reason})",
+            "check that the file is a complete, uncorrupted mesh export",
+        ) from None
+    geoms = loaded.dump() if isinstance(loaded, trimesh.Scene) else [loaded]
+    verts, faces, offset, objects = [], [], 0, 0
+    points_only = False
+    for g in geoms:
+        if isinstance(g, trimesh.Trimesh) and len(g.faces):
+            v = np.asarray(g.vertices, dtype=np.float64)
+            f = np.asarray(g.faces, dtype=np.int64)
+            verts.append(v)
+            faces.append(f + offset)
+            offset += len(v)
+            objects += 1
+        elif isinstance(g, (trimesh.PointCloud, trimesh.Trimesh)) and len(getattr(g, "vertices", [])):
+            points_only = True
+    if not faces:
+        if points_only:
+            raise InputError(
+                f"{path}: holds points but no triangles (a point cloud)",
+                "mesh the point cloud first (e.g. Poisson reconstruction) or export the scan as a mesh",
+            )
+        raise InputError(f"{path}: holds no triangles", "export the scan again as a triangle mesh")
+    return np.concatenate(verts), np.concatenate(faces), objects
+
+
+def clean_mesh(vertices: np.ndarray, faces: np.ndarray) -> tuple[Mesh, dict[str, int]]:
+    """Drop unusable faces, merge coincident vertices and count what was dropped."""
+    counts = {}
+    finite_v = np.all(np.isfinite(vertices), axis=1)
+    ok = np.all(finite_v[faces], axis=1)
+    counts["dropped_nonfinite"] = int((~ok).sum())
+    faces = faces[ok]
+    vertices = np.where(finite_v[:, None], vertices, 0.0)
+    # merge vertices at exactly the same position
+    uniq, inverse = np.unique(vertices, axis=0, return_inverse=True)
+    faces = inverse.reshape(-1)[faces]
+    tri = uniq[faces]
+    cross = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    area = 0.5 * np.linalg.norm(cross, axis=1)
+    repeated = (faces[:, 0] == faces[:, 1]) | (faces[:, 1] == faces[:, 2]) | (faces[:, 0] == faces[:, 2])
+    degenerate = repeated | ~(area > MIN_FACE_AREA_M2)
+    counts["dropped_degenerate"] = int(degenerate.sum())
+    faces = faces[~degenerate]
+    key = np.sort(faces, axis=1)
+    _, first = np.unique(key, axis=0, return_index=True)
+    counts["dropped_duplicate"] = int(len(faces) - len(first))
+    faces = faces[np.sort(first)]
+    used, compact = np.unique(faces, return_inverse=True)
+    return Mesh(uniq[used], compact.reshape(-1, 3)), counts
+
+
+def load_mesh(path: str | os.PathLike, units: str = "m", max_faces: int | None = None) -> LoadedMesh:
+    """Read a mesh file into metres and drop the faces that cannot be used.
+
+    Parameters
+    ----------
+    path
+        OBJ, PLY, GLB, glTF, STL or OFF file.
+    units
+        Unit of the file's coordinates: ``m``, ``cm``, ``mm``, ``ft`` or ``in``.
+    max_faces
+        Refuse files with more faces than this; ``None`` refuses only what cannot fit in the
+        available memory.
+
+    Raises
+    ------
+    InputError
+        When the file is missing, unreadable, not a mesh, too large, or has no usable face.
+    """
+    scale = check_units(units)
+    p, file_type = check_mesh_path(path)
+    check_size(p, file_type, max_faces)
+    vertices, faces, objects = _read_with_trimesh(p, file_type)
+    n_v, n_f = len(vertices), len(faces)
+    if faces.size and (faces.min() < 0 or faces.max() >= n_v):
+        raise InputError(f"{p}: faces refer to vertices that do not exist", "export the scan again")
+    mesh, counts = clean_mesh(vertices * scale, faces)
+    stats = LoadStats(
+        path=str(p),
+        format=file_type,
+        units=units,
+        scale_to_m=scale,
+        objects=objects,
+        vertices_read=n_v,
+        faces_read=n_f,
+        vertices=mesh.n_vertices,
+        faces=mesh.n_faces,
+        **counts,
+    )
+    if mesh.n_faces == 0:
+        raise InputError(
+            f"{p}: none of its {n_f:,} faces is usable ({stats.dropped_nonfinite:,} with NaN or infinite "
+            f"coordinates, {stats.dropped_degenerate:,} degenerate, {stats.dropped_duplicate:,} duplicate)",
+            "export the scan again",
+        )
+    return LoadedMesh(mesh=mesh, stats=stats)
+
+
+def write_mesh(mesh: Mesh, path: str | os.PathLike) -> None:
+    """Write a mesh in the format its extension names (OBJ, PLY, GLB, STL, OFF), atomically."""
+    import trimesh
+
+    from .atomic import atomic_write_bytes
+
+    p = Path(path)
+    ext = p.suffix.lower()
+    if ext not in MESH_FORMATS or ext == ".gltf":
+        raise ParameterError(f"cannot write mesh format {ext!r}", "use .obj, .ply, .glb, .stl or .off")
+    tm = trimesh.Trimesh(mesh.vertices, mesh.faces, process=False)
+    data = tm.export(file_type=MESH_FORMATS[ext])
+    atomic_write_bytes(p, data if isinstance(data, bytes) else data.encode())

@@ -1,0 +1,102 @@
+"""All options of a run, grouped by the stage that owns them.
+
+Each stage defines its own frozen parameter dataclass with the paper's defaults (see
+:class:`meshplan.orient.OrientParams`, ...). :class:`RunOptions` holds one of each plus the input
+and output options, and :meth:`RunOptions.from_kwargs` routes flat keyword options (as the CLI and
+:func:`meshplan.run` take them) to the stage that owns each name, so every default lives in exactly
+one place.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+from typing import Any
+
+from .errors import ParameterError
+from .io.mesh import check_units
+from .orient.params import OrientParams
+from .plan.params import PlanParams
+from .render.params import RenderParams
+from .walls.params import WallParams
+
+
+@dataclass(frozen=True)
+class InputParams:
+    """How the input is read.
+
+    Attributes
+    ----------
+    units
+        Unit of the scan's coordinates (m, cm, mm, ft, in).
+    max_faces
+        Refuse scans with more faces than this; ``None`` refuses only scans that cannot fit in
+        the available memory.
+    """
+
+    units: str = "m"
+    max_faces: int | None = None
+
+    def __post_init__(self) -> None:
+        check_units(self.units)
+        if self.max_faces is not None and (not isinstance(self.max_faces, int) or self.max_faces <= 0):
+            raise ParameterError(f"max_faces must be a positive integer, got {self.max_faces!r}", "pass --max-faces N")
+
+
+_GROUPS = {
+    "input": InputParams,
+    "orient": OrientParams,
+    "walls": WallParams,
+    "plan": PlanParams,
+    "render": RenderParams,
+}
+
+
+@dataclass(frozen=True)
+class RunOptions:
+    """Every parameter of a run, one frozen dataclass per stage."""
+
+    input: InputParams = field(default_factory=InputParams)
+    orient: OrientParams = field(default_factory=OrientParams)
+    walls: WallParams = field(default_factory=WallParams)
+    plan: PlanParams = field(default_factory=PlanParams)
+    render: RenderParams = field(default_factory=RenderParams)
+
+    @classmethod
+    def names(cls) -> dict[str, str]:
+        """Every flat option name and the group that owns it."""
+        out: dict[str, str] = {}
+        for group, klass in _GROUPS.items():
+            for f in dataclasses.fields(klass):
+                if f.name in out:  # pragma: no cover - guarded by a test
+                    raise RuntimeError(f"option {f.name} defined twice")
+                out[f.name] = group
+        return out
+
+    @classmethod
+    def from_kwargs(cls, **options: Any) -> RunOptions:
+        """Build the options from flat keywords (``up="+z", slices=50, ...``).
+
+        Raises
+        ------
+        ParameterError
+            For an unknown option name or an invalid value.
+        """
+        names = cls.names()
+        grouped: dict[str, dict[str, Any]] = {g: {} for g in _GROUPS}
+        for key, value in options.items():
+            if key not in names:
+                close = [n for n in names if n.startswith(key[:4])]
+                raise ParameterError(
+                    f"unknown option {key!r}", f"did you mean {close[0]!r}?" if close else "see meshplan run --help"
+                )
+            if value is not None or key == "max_faces":
+                grouped[names[key]][key] = value
+        try:
+            return cls(**{g: _GROUPS[g](**kw) for g, kw in grouped.items()})
+        except TypeError as exc:  # wrong type for a field
+            raise ParameterError(str(exc), "check the option values") from None
+
+    def to_dict(self) -> dict[str, dict[str, Any]]:
+        """All parameters, grouped by stage (JSON-ready)."""
+        return {g: dataclasses.asdict(getattr(self, g)) for g in _GROUPS}

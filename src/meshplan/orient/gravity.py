@@ -1,0 +1,258 @@
+"""Which way is up: the paper's "Orienting the floor", made to work on scans that are not y-up.
+
+The paper assumes a rough up direction (+y) and refines it with spherical k-means (k = 1) on the
+faces whose normals lie within a cone around it, the cone narrowing from 30 to 3 degrees
+(Method 2); Method 1 takes the shortest edge of the bounding box. Real scans break the assumption:
+z-up datasets, HoloLens 2 meshes whose frame is tilted by up to 40 degrees, and triangle winding
+that may point the normals either way. So with ``up="auto"`` the rough direction is found first,
+from the floor and ceiling structure:
+
+1. *Axis.* The dominant axes of the face normals, sign ignored, are candidates. Floors, ceilings
+   and the tops of furniture make the up axis the heaviest in almost every scan; a candidate whose
+   two main parallel surfaces are closer than a room height (the walls of a corridor) is demoted,
+   as is one whose surfaces are not spread along the axis at all (a single wall).
+2. *Sign.* Furniture stands on the floor and the lower part of a room is scanned more densely than
+   the upper part, so in the bottom third of each story the vertical surfaces cover much more of
+   the plan than in the top third. The sign that puts the busier band at the bottom is up. (The
+   normals cannot tell: they may face either way.)
+3. *Refinement.* The paper's Method 2, with normals folded onto the up hemisphere so that floors
+   and ceilings both contribute whatever their winding.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import GeometryError
+from ..geometry import FloatArray, Mesh, unit
+from ..sphere import axial_peaks
+from .levels import find_spikes
+from .params import OrientParams
+
+_AXES = {
+    "+x": (1.0, 0.0, 0.0),
+    "-x": (-1.0, 0.0, 0.0),
+    "+y": (0.0, 1.0, 0.0),
+    "-y": (0.0, -1.0, 0.0),
+    "+z": (0.0, 0.0, 1.0),
+    "-z": (0.0, 0.0, -1.0),
+}
+
+#: Plan cell size (m) of the occupancy test deciding the sign of up.
+_OCCUPANCY_CELL_M = 0.1
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """A candidate up axis and how it scored."""
+
+    axis: FloatArray
+    weight: float  # area of faces within the peak's cap
+    plausibility: float
+    score: float
+
+
+@dataclass(frozen=True)
+class GravityEstimate:
+    """The up direction (against gravity) in input coordinates, and how it was found."""
+
+    up: FloatArray
+    method: str
+    rough_up: FloatArray
+    method_up: FloatArray  # the estimate of the paper's method, before any slab refinement
+    sign_evidence: float  # log-ratio of bottom to top occupancy; positive supports ``up``
+    candidates: tuple[Candidate, ...]
+    faces_used: int  # faces in the final cone of Method 2 (0 for Method 1)
+
+
+def _occupancy_sign(centroids: FloatArray, normals: FloatArray, areas: FloatArray, axis: FloatArray, params: OrientParams) -> float:
+    """Evidence that ``axis`` (rather than ``-axis``) points up: log of the ratio of the plan
+    cells covered by vertical surfaces in the bottom band of each story to those covered in the
+    top band."""
+    h = centroids @ axis
+    nh = normals @ axis
+    horiz = np.abs(nh) >= np.cos(np.radians(params.horizontal_tolerance_deg))
+    spikes = find_spikes(h[horiz], areas[horiz], params.level_bucket_m, 0.2)
+    slabs = sorted(s.height for s in spikes)
+    intervals = [(a, b) for a, b in zip(slabs[:-1], slabs[1:]) if b - a >= params.min_room_height_m]
+    if not intervals:
+        lo, hi = np.quantile(h, [0.005, 0.995]) if len(h) > 1 else (0.0, 0.0)
+        if hi - lo <= 0:
+            return 0.0
+        intervals = [(float(lo), float(hi))]
+    e1 = unit(np.cross(axis, [1.0, 0.0, 0.0] if abs(axis[0]) < 0.9 else [0.0, 1.0, 0.0]))
+    e2 = np.cross(axis, e1)
+    vert = np.abs(nh) < np.cos(np.radians(45.0))
+    cv, hv = centroids[vert], h[vert]
+    plan = np.floor(np.c_[cv @ e1, cv @ e2] / _OCCUPANCY_CELL_M).astype(np.int64)
+    low = high = 0
+    for a, b in intervals:
+        t = (hv - a) / (b - a)
+        for band, (t0, t1) in ((0, (0.1, 0.4)), (1, (0.6, 0.9))):
+            cells = plan[(t > t0) & (t < t1)]
+            n = len(np.unique(cells[:, 0] * 1_000_003 + cells[:, 1])) if len(cells) else 0
+            if band == 0:
+                low += n
+            else:
+                high += n
+    return float(np.log((low + 1.0) / (high + 1.0)))
+
+
+def _plausibility(centroids: FloatArray, normals: FloatArray, areas: FloatArray, axis: FloatArray, params: OrientParams) -> float:
+    """How much the surfaces perpendicular to ``axis`` look like floors and ceilings (0-1)."""
+    nh = normals @ axis
+    aligned = np.abs(nh) >= np.cos(np.radians(params.horizontal_tolerance_deg))
+    h = centroids[aligned] @ axis
+    spikes = find_spikes(h, areas[aligned], params.level_bucket_m, 0.25)
+    if len(spikes) >= 2:
+        span = spikes[-1].height - spikes[0].height
+        if span < params.min_room_height_m:
+            return 0.3  # two big parallel surfaces closer than a room is high: corridor walls
+    # a building has walls: surfaces parallel to the axis
+    vertical = np.abs(nh) <= np.sin(np.radians(params.wall_exclusion_deg))
+    if areas[vertical].sum() < 0.05 * areas.sum():
+        return 0.1
+    return 1.0
+
+
+def _refine_kmeans(normals: FloatArray, areas: FloatArray, rough: FloatArray, cones_deg: tuple[float, ...]) -> tuple[FloatArray, int]:
+    """The paper's Method 2: spherical k-means with k = 1 inside a narrowing cone.
+
+    Normals are folded onto the hemisphere of ``rough`` (floors and ceilings both count,
+    whatever their winding) and the cluster centre is re-estimated until it settles at each
+    cone angle.
+    """
+    g = unit(rough)
+    dots = normals @ g
+    widest = np.cos(np.radians(cones_deg[0] + 10.0))
+    cand = np.flatnonzero(np.abs(dots) >= widest)
+    n = normals[cand] * np.sign(dots[cand])[:, None]
+    a = areas[cand]
+    used = 0
+    for cone in cones_deg:
+        cos_c = np.cos(np.radians(cone))
+        for _ in range(20):
+            sel = n @ g >= cos_c
+            if not sel.any():
+                break
+            new = unit((n[sel] * a[sel, None]).sum(axis=0))
+            done = float(new @ g) > 1 - 1e-14
+            g = new
+            if done:
+                break
+        used = int(sel.sum())
+    return g, used
+
+
+def _bbox_axis(mesh: Mesh) -> FloatArray:
+    """Method 1: the direction of the shortest edge of the minimum-volume bounding box."""
+    import trimesh
+
+    pts = mesh.vertices[np.unique(mesh.faces)]
+    to_origin, extents = trimesh.bounds.oriented_bounds(pts)
+    rot = np.linalg.inv(to_origin)[:3, :3]
+    return unit(rot[:, int(np.argmin(extents))])
+
+
+def estimate_gravity(mesh: Mesh, params: OrientParams) -> GravityEstimate:
+    """The up direction of ``mesh`` in its own coordinates.
+
+    Raises
+    ------
+    GeometryError
+        When no surface of the scan can be a floor.
+    """
+    normals, areas, centroids = mesh.face_normals, mesh.face_areas, mesh.face_centroids
+    candidates: list[Candidate] = []
+    if params.up != "auto":
+        rough = np.array(_AXES[params.up])
+        evidence = 0.0
+    else:
+        peaks = axial_peaks(normals, areas, count=6)
+        if not peaks:
+            raise GeometryError("no floor found: the mesh has no faces with an area", "check the scan")
+        top = peaks[0].weight
+        for p in peaks:
+            if p.weight < 0.05 * top:
+                break
+            plaus = _plausibility(centroids, normals, areas, p.axis, params)
+            candidates.append(Candidate(p.axis, p.weight, plaus, p.weight * plaus))
+        best = max(candidates, key=lambda c: c.score)
+        axis = best.axis
+        evidence = _occupancy_sign(centroids, normals, areas, axis, params)
+        if abs(evidence) < 0.05:
+            # no evidence either way: follow the file's convention (its nearest axis points up)
+            k = int(np.argmax(np.abs(axis)))
+            evidence = 0.0
+            rough = axis if axis[k] > 0 else -axis
+        else:
+            rough = axis if evidence > 0 else -axis
+            evidence = abs(evidence)
+    if params.gravity_method == "bbox":
+        axis = _bbox_axis(mesh)
+        up = axis if axis @ rough >= 0 else -axis
+        return GravityEstimate(up, "bbox", unit(rough), up, evidence, tuple(candidates), 0)
+    up, used = _refine_kmeans(normals, areas, rough, params.gravity_cones_deg)
+    if used == 0:
+        raise GeometryError(
+            f"no floor found: no surface faces within {params.gravity_cones_deg[0]:.0f} degrees of the up axis {np.round(rough, 3).tolist()}",
+            "check --up, or that the scan includes the floor",
+        )
+    return GravityEstimate(up, "kmeans", unit(rough), up, evidence, tuple(candidates), used)
+
+
+def refine_with_slabs(
+    centroids: FloatArray,
+    normals: FloatArray,
+    areas: FloatArray,
+    up: FloatArray,
+    slab_heights: list[float],
+    params: OrientParams,
+    iterations: int = 3,
+) -> tuple[FloatArray, int]:
+    """Up as the common normal of the floor and ceiling slabs, fitted to face positions.
+
+    Each near-horizontal face within a few centimetres of a slab height is centred on its
+    slab's weighted mean; the up direction is the eigenvector of the smallest eigenvalue of the
+    pooled, area-weighted scatter of those offsets. The window narrows to three standard
+    deviations of the residual heights. The refinement is rejected (``up`` returned unchanged)
+    when the slabs are too small to define a plane or it would move up by more than 2 degrees.
+
+    Returns the refined up direction and the number of faces used.
+    """
+    g = unit(up)
+    window = 0.03
+    used = 0
+    slabs = np.asarray(sorted(slab_heights), dtype=np.float64)
+    if not len(slabs):
+        return g, 0
+    for _ in range(iterations):
+        h = centroids @ g
+        horiz = np.abs(normals @ g) >= np.cos(np.radians(params.horizontal_tolerance_deg))
+        idx = np.flatnonzero(horiz)
+        k = np.abs(h[idx, None] - slabs[None, :]).argmin(axis=1)
+        near = np.abs(h[idx] - slabs[k]) < window
+        idx, k = idx[near], k[near]
+        if len(idx) < 10:
+            break
+        a = areas[idx]
+        wsum = np.bincount(k, weights=a, minlength=len(slabs))
+        means = np.stack([np.bincount(k, weights=a * centroids[idx, d], minlength=len(slabs)) for d in range(3)], axis=1)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            means = means / wsum[:, None]
+        x = centroids[idx] - means[k]
+        scatter = (x * a[:, None]).T @ x
+        vals, vecs = np.linalg.eigh(scatter)
+        if not vals[1] > 25.0 * max(vals[0], 1e-18):
+            break  # slabs too small or too noisy to define a plane
+        new = vecs[:, 0] * np.sign(vecs[:, 0] @ g)
+        if new @ up < np.cos(np.radians(2.0)):
+            break
+        g, used = unit(new), int(len(idx))
+        resid = x @ g
+        sd = float(np.sqrt(np.average(resid**2, weights=a)))
+        slabs = np.asarray([float(means[j] @ g) if wsum[j] > 0 else slabs[j] for j in range(len(slabs))])
+        window = max(3.0 * sd, 0.02)
+    return g, used

@@ -1,0 +1,251 @@
+"""The whole job, from a scan on disk to plans: :func:`run` (also exposed as ``meshplan.run``).
+
+The command line is a thin layer over :func:`run`. Stages only compute; files are written at the
+very end, all at once, through :mod:`meshplan.export` (a failure leaves nothing behind).
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import time
+from collections.abc import Callable
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .geometry import Annotations, Mesh
+from .io import LoadStats, load_annotations, load_mesh
+from .options import RunOptions
+from .orient import Orientation, Story, assign_faces, orient
+from .plan import DraftingPlan, PenAndInkPlan, drafting, pen_and_ink
+from .walls import FlatWalls, find_flat_walls
+
+log = logging.getLogger("meshplan")
+
+#: Stages reported to progress callbacks, in order.
+STAGES = ("load", "orient", "walls", "slice_draw", "write")
+
+#: The paper's Table 1 timings (seconds) for its residential building B2 (285,840 faces).
+PAPER_TIMINGS_S = {"orient": 24.08, "walls": 81.5, "slice_draw": 0.9}
+PAPER_FACES = 285_840
+
+Progress = Callable[[str, str], None]  # (stage, "start" | "done")
+
+
+@dataclass(frozen=True, eq=False)
+class StoryPlans:
+    """Everything drawn for one story."""
+
+    story: Story
+    pen_and_ink: PenAndInkPlan
+    drafting: DraftingPlan
+    annotations: Annotations  # the annotations on this story (plan frame)
+
+
+@dataclass(eq=False)
+class Result:
+    """What :func:`run` found and made.
+
+    Attributes
+    ----------
+    input
+        What was read from the scan and what was dropped.
+    options
+        Every parameter used.
+    orientation
+        Transform, levels, wall directions and stories.
+    mesh
+        The scan in the plan frame, normals facing into the rooms.
+    annotations
+        The annotations in the plan frame.
+    walls
+        The flat walls of every story.
+    stories
+        The plans of each story.
+    timings
+        Seconds per stage, with ``total``.
+    output_dir
+        Where the files were written (``None`` when nothing was written).
+    files
+        Names of the files written, in order.
+    warnings
+        Things the user should know.
+    """
+
+    input: LoadStats
+    options: RunOptions
+    orientation: Orientation
+    mesh: Mesh
+    annotations: Annotations
+    walls: FlatWalls
+    stories: tuple[StoryPlans, ...]
+    timings: dict[str, float] = field(default_factory=dict)
+    output_dir: Path | None = None
+    files: tuple[str, ...] = ()
+    warnings: tuple[str, ...] = ()
+    annotation_story: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+
+    @property
+    def transform(self) -> np.ndarray:
+        """4x4 rigid transform from input coordinates to the plan frame."""
+        return self.orientation.transform
+
+    def summary(self) -> dict[str, Any]:
+        """A short JSON-ready summary (what ``meshplan run --json`` prints)."""
+        return {
+            "scan": self.input.path,
+            "output": str(self.output_dir) if self.output_dir else None,
+            "faces": self.input.faces,
+            "stories": [s.story.to_dict(3) for s in self.stories],
+            "walls": len(self.walls),
+            "annotations": len(self.annotations),
+            "warnings": list(self.warnings),
+            "timings": {k: round(v, 4) for k, v in self.timings.items()},
+        }
+
+
+class _Timer:
+    def __init__(self, progress: Progress | None) -> None:
+        self.timings: dict[str, float] = {}
+        self.progress = progress
+
+    @contextmanager
+    def stage(self, name: str):
+        if self.progress:
+            self.progress(name, "start")
+        t0 = time.perf_counter()
+        try:
+            yield
+        finally:
+            self.timings[name] = self.timings.get(name, 0.0) + time.perf_counter() - t0
+        log.debug("stage %s: %.3f s", name, self.timings[name])
+        if self.progress:
+            self.progress(name, "done")
+
+
+def compute(
+    mesh: Mesh,
+    stats: LoadStats,
+    annotations: Annotations,
+    options: RunOptions,
+    timer: _Timer | None = None,
+) -> Result:
+    """Run every computing stage on an already loaded mesh (input coordinates, metres)."""
+    timer = timer or _Timer(None)
+    with timer.stage("orient"):
+        orientation = orient(mesh, options.orient)
+        plan_mesh = mesh.transformed(orientation.transform).with_flipped(orientation.flipped)
+        plan_annotations = annotations.transformed(orientation.transform)
+    with timer.stage("walls"):
+        walls = find_flat_walls(plan_mesh, orientation, options.walls)
+    with timer.stage("slice_draw"):
+        ann_story = assign_faces(plan_annotations.positions[:, 1], orientation.stories) if len(plan_annotations) else np.zeros(0, np.int64)
+        plans = []
+        for story in orientation.stories:
+            sel = np.flatnonzero(ann_story == story.index)
+            story_ann = Annotations(
+                tuple(plan_annotations.labels[i] for i in sel),
+                tuple(plan_annotations.kinds[i] for i in sel),
+                plan_annotations.positions[sel],
+                plan_annotations.directions[sel],
+            )
+            plans.append(
+                StoryPlans(
+                    story=story,
+                    pen_and_ink=pen_and_ink(plan_mesh, orientation, story, options.plan),
+                    drafting=drafting(walls, story, options.plan),
+                    annotations=story_ann,
+                )
+            )
+    warnings = list(orientation.warnings)
+    for s in orientation.stories:
+        if not np.any(walls.story == s.index):
+            warnings.append(f"story {s.index}: no flat wall found (the drafting plan is empty)")
+    return Result(
+        input=stats,
+        options=options,
+        orientation=orientation,
+        mesh=plan_mesh,
+        annotations=plan_annotations,
+        walls=walls,
+        stories=tuple(plans),
+        timings=timer.timings,
+        warnings=tuple(warnings),
+        annotation_story=ann_story,
+    )
+
+
+def default_output_dir(scan: str | os.PathLike) -> Path:
+    """``./meshplan-out/<scan name>``."""
+    return Path("meshplan-out") / Path(scan).stem
+
+
+def run(
+    scan: str | os.PathLike,
+    *,
+    annotations: str | os.PathLike | None = None,
+    output: str | os.PathLike | None = None,
+    force: bool = False,
+    progress: Progress | None = None,
+    options: RunOptions | None = None,
+    **params: Any,
+) -> Result:
+    """Turn a scanned mesh into an oriented model and floor plans.
+
+    Parameters
+    ----------
+    scan
+        OBJ, PLY, GLB/glTF, STL or OFF file.
+    annotations
+        Optional annotation file (JSON, input coordinates).
+    output
+        Directory to write the results to; nothing is written when ``None``. It must not exist
+        unless ``force``.
+    force
+        Replace an existing output directory (atomically).
+    progress
+        Called with ``(stage, "start" | "done")``.
+    options
+        All parameters at once; or give them as keywords (``units="cm"``, ``up="+z"``,
+        ``slices=50``, ... the same names as the command-line options).
+
+    Returns
+    -------
+    Result
+
+    Raises
+    ------
+    MeshplanError
+        For any problem with the input or the options, with a one-line explanation.
+
+    Examples
+    --------
+    >>> import meshplan
+    >>> result = meshplan.run("scan.obj", output="out", units="cm")  # doctest: +SKIP
+    >>> [s.floor for s in result.orientation.stories]  # doctest: +SKIP
+    [0.0]
+    """
+    from .export import write_results
+    from .io import check_output_dir
+
+    if options is None:
+        options = RunOptions.from_kwargs(**params)
+    elif params:
+        raise TypeError("give either options or keyword parameters, not both")
+    if output is not None:
+        check_output_dir(output, force)
+    timer = _Timer(progress)
+    t0 = time.perf_counter()
+    with timer.stage("load"):
+        loaded = load_mesh(scan, options.input.units, options.input.max_faces)
+        ann = load_annotations(annotations, loaded.stats.scale_to_m) if annotations is not None else Annotations()
+    result = compute(loaded.mesh, loaded.stats, ann, options, timer)
+    if output is not None:
+        write_results(result, Path(output), force=force, timer=timer, started=t0)
+    else:
+        result.timings["total"] = time.perf_counter() - t0
+    return result

@@ -1,0 +1,260 @@
+"""Drawing sheets: plans at a stated scale, seen from above (x to the right, z down the page).
+
+Every plan of a story is drawn on the same :class:`Sheet`, so the pen-and-ink plan, the drafting
+plan and the segment drawing line up when overlaid. Figures are made with matplotlib's object
+API (no pyplot, no global state) and rendered to bytes; writing them is the export stage's job.
+"""
+
+from __future__ import annotations
+
+import io
+from dataclasses import dataclass
+
+import numpy as np
+
+from .params import STANDARD_SCALES, RenderParams
+
+FOOT_M = 0.3048
+INCH_M = 0.0254
+
+#: Space around the drawing area, in inches: left, right, top, bottom.
+_MARGINS_IN = (0.75, 0.35, 0.6, 0.85)
+#: Largest drawing (model extent / scale) the automatic scale aims for, in metres of paper.
+_MAX_PAPER_M = 0.30
+#: Largest raster side in pixels; huge buildings get a coarser raster rather than run out of memory.
+_MAX_PIXELS = 8000
+
+#: Marker of each annotation kind (all drawn in red).
+KIND_MARKERS = {"sensor": "o", "thermostat": "s", "door": "D", "window": "^", "other": "*"}
+ANNOTATION_COLOR = "#d62728"
+
+
+@dataclass(frozen=True)
+class Sheet:
+    """The model area drawn and the scale it is drawn at.
+
+    Attributes
+    ----------
+    xmin, xmax, zmin, zmax
+        Model extent shown (metres, plan frame).
+    scale
+        1:``scale``: one metre of model is ``1/scale`` metres of paper.
+    dpi
+        Raster resolution (pixels per inch of paper).
+    """
+
+    xmin: float
+    xmax: float
+    zmin: float
+    zmax: float
+    scale: int
+    dpi: int
+
+    @property
+    def width_m(self) -> float:
+        return self.xmax - self.xmin
+
+    @property
+    def depth_m(self) -> float:
+        return self.zmax - self.zmin
+
+    @property
+    def pixel_m(self) -> float:
+        """Model size of one output pixel."""
+        return self.scale * INCH_M / self.dpi
+
+    @property
+    def raster_shape(self) -> tuple[int, int]:
+        """(rows along z, columns along x) of the ink raster."""
+        p = self.pixel_m
+        return max(1, int(np.ceil(self.depth_m / p))), max(1, int(np.ceil(self.width_m / p)))
+
+
+def make_sheet(points_xz: np.ndarray, params: RenderParams, margin_m: float = 0.5) -> Sheet:
+    """A sheet covering the points (robustly: 0.2 % outliers ignored) with a margin."""
+    pts = np.asarray(points_xz, dtype=np.float64).reshape(-1, 2)
+    if len(pts) == 0:
+        lo, hi = np.zeros(2), np.ones(2)
+    else:
+        lo = np.quantile(pts, 0.001, axis=0)
+        hi = np.quantile(pts, 0.999, axis=0)
+    lo, hi = lo - margin_m, hi + margin_m
+    longest = float(max(hi - lo))
+    scale = params.scale
+    if scale == 0:
+        scale = next((s for s in STANDARD_SCALES if longest / s <= _MAX_PAPER_M), STANDARD_SCALES[-1])
+    # huge sheets (a forced small scale) get fewer dots per inch rather than exhaust memory
+    dpi = min(params.dpi, max(30, int(_MAX_PIXELS * scale * INCH_M / longest)))
+    return Sheet(float(lo[0]), float(hi[0]), float(lo[1]), float(hi[1]), int(scale), dpi)
+
+
+def new_figure(sheet: Sheet, title: str, params: RenderParams):
+    """A figure whose axes show the sheet's model area at exactly its scale, z down the page."""
+    from matplotlib.figure import Figure
+    from matplotlib.ticker import FuncFormatter
+
+    w_in = sheet.width_m / sheet.scale / INCH_M
+    h_in = sheet.depth_m / sheet.scale / INCH_M
+    left, right, top, bottom = _MARGINS_IN
+    fw, fh = w_in + left + right, h_in + top + bottom
+    fig = Figure(figsize=(fw, fh), dpi=sheet.dpi)
+    ax = fig.add_axes((left / fw, bottom / fh, w_in / fw, h_in / fh))
+    ax.set_xlim(sheet.xmin, sheet.xmax)
+    ax.set_ylim(sheet.zmax, sheet.zmin)  # z down the page
+    ax.set_aspect("equal", adjustable="box")
+    unit = FOOT_M if params.imperial else 1.0
+    ax.xaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v / unit:g}"))
+    ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v / unit:g}"))
+    ax.tick_params(labelsize=6, length=2, width=0.4, colors="#555555")
+    for s in ax.spines.values():
+        s.set_linewidth(0.4)
+        s.set_color("#999999")
+    ax.set_xlabel(f"x ({'ft' if params.imperial else 'm'})", fontsize=6, color="#555555", labelpad=1)
+    ax.set_ylabel(f"z ({'ft' if params.imperial else 'm'})", fontsize=6, color="#555555", labelpad=1)
+    fig.text(left / fw, 1 - 0.18 / fh, title, fontsize=9, va="top", ha="left", weight="bold")
+    fig.text(
+        left / fw,
+        1 - 0.36 / fh,
+        f"Scale 1:{sheet.scale} on a {w_in + left + right:.1f} x {h_in + top + bottom:.1f} in page",
+        fontsize=6,
+        va="top",
+        ha="left",
+        color="#555555",
+    )
+    return fig, ax
+
+
+def place_raster(fig, ax, rgba: np.ndarray) -> None:
+    """Put a raster made at the sheet's pixel size over the axes, pixel for pixel (no
+    resampling: the raster is exactly what the PNG shows)."""
+    left, right, top, bottom = _MARGINS_IN
+    dpi = fig.dpi
+    h_px = ax.get_position().height * fig.get_figheight() * dpi
+    fig.figimage(rgba, xo=int(round(left * dpi)), yo=int(round(bottom * dpi + h_px - rgba.shape[0])), origin="upper", zorder=1)
+
+
+def nice_length(target: float) -> float:
+    """The 1-2-5 number closest below ``target``."""
+    if target <= 0:
+        return 1.0
+    exp = np.floor(np.log10(target))
+    for m in (5, 2, 1):
+        if m * 10**exp <= target:
+            return float(m * 10**exp)
+    return float(10**exp)
+
+
+def draw_scale_bar(fig, sheet: Sheet, params: RenderParams) -> None:
+    """A scale bar in metres (or feet) below the drawing, four alternating blocks."""
+    from matplotlib.patches import Rectangle
+
+    unit, name = (FOOT_M, "ft") if params.imperial else (1.0, "m")
+    total = nice_length(sheet.width_m / unit / 3.0)
+    left, right, top, bottom = _MARGINS_IN
+    fw = fig.get_figwidth()
+    fh = fig.get_figheight()
+    w_in = total * unit / sheet.scale / INCH_M
+    ax = fig.add_axes((left / fw, 0.22 / fh, w_in / fw, 0.07 / fh))
+    ax.set_xlim(0, total)
+    ax.set_ylim(0, 1)
+    ax.axis("off")
+    for i in range(4):
+        ax.add_patch(
+            Rectangle((i * total / 4, 0), total / 4, 1, facecolor="black" if i % 2 == 0 else "white", edgecolor="black", linewidth=0.5)
+        )
+    for v in (0, total / 2, total):
+        ax.text(v, 1.6, f"{v:g}", ha="center", va="bottom", fontsize=6)
+    ax.text(total * 1.04, 0.5, name, ha="left", va="center", fontsize=6)
+
+
+def draw_annotations(ax, labels, kinds, positions, directions, probe_m: float = 0.4) -> None:
+    """Annotated objects as red markers with their labels and probe directions."""
+    if not len(labels):
+        return
+    pos = np.asarray(positions)
+    dirs = np.asarray(directions)
+    seen = set()
+    for i, (label, kind) in enumerate(zip(labels, kinds)):
+        x, z = pos[i, 0], pos[i, 2]
+        ax.plot(
+            [x],
+            [z],
+            marker=KIND_MARKERS.get(kind, "*"),
+            color=ANNOTATION_COLOR,
+            markersize=4.5,
+            markeredgewidth=0.4,
+            markeredgecolor="white",
+            linestyle="none",
+            label=kind if kind not in seen else None,
+            zorder=5,
+        )
+        seen.add(kind)
+        d = dirs[i]
+        if np.all(np.isfinite(d)) and np.hypot(d[0], d[2]) > 1e-6:
+            dx, dz = d[0], d[2]
+            n = np.hypot(dx, dz)
+            ax.annotate(
+                "",
+                xy=(x + probe_m * dx / n, z + probe_m * dz / n),
+                xytext=(x, z),
+                arrowprops=dict(arrowstyle="-|>", color=ANNOTATION_COLOR, lw=0.8, mutation_scale=5),
+                zorder=5,
+            )
+        ax.annotate(label, (x, z), xytext=(3, 3), textcoords="offset points", fontsize=5.5, color=ANNOTATION_COLOR, zorder=6)
+    ax.legend(loc="lower right", fontsize=5, frameon=True, framealpha=0.8, markerscale=0.8, borderpad=0.3, handletextpad=0.3)
+
+
+def rasterize_segments(segments: np.ndarray, level: np.ndarray, sheet: Sheet) -> np.ndarray:
+    """``(rows, cols)`` number of distinct slices whose segments cross each pixel.
+
+    Segments are sampled at half-pixel steps; a pixel counts each slice once, so a slice's
+    chain of segments does not darken itself where its segments meet.
+    """
+    rows, cols = sheet.raster_shape
+    if not len(segments):
+        return np.zeros((rows, cols), dtype=np.int32)
+    p = sheet.pixel_m
+    a = (segments[:, 0] - [sheet.xmin, sheet.zmin]) / p
+    b = (segments[:, 1] - [sheet.xmin, sheet.zmin]) / p
+    length = np.hypot(*(b - a).T)
+    n = np.ceil(2 * length).astype(np.int64) + 1
+    seg = np.repeat(np.arange(len(a)), n)
+    t = (np.arange(len(seg)) - np.repeat(np.cumsum(n) - n, n)) / np.repeat(np.maximum(n - 1, 1), n)
+    pts = a[seg] + (b - a)[seg] * t[:, None]
+    c = np.floor(pts[:, 0]).astype(np.int64)
+    r = np.floor(pts[:, 1]).astype(np.int64)
+    inside = (c >= 0) & (c < cols) & (r >= 0) & (r < rows)
+    pix = r[inside] * cols + c[inside]
+    lv = np.asarray(level)[seg[inside]]
+    n_levels = int(lv.max()) + 1 if len(lv) else 1
+    key = np.unique(pix * n_levels + lv)
+    return np.bincount(key // n_levels, minlength=rows * cols).reshape(rows, cols).astype(np.int32)
+
+
+def ink_rgba(counts: np.ndarray, opacity: float, color: str = "#14213d", width_px: int = 2) -> np.ndarray:
+    """Translucent ink: a pixel crossed by ``k`` slices has opacity ``1 - (1 - opacity)^k``."""
+    from matplotlib.colors import to_rgb
+    from scipy.ndimage import grey_dilation
+
+    if width_px > 1:
+        counts = grey_dilation(counts, size=(width_px, width_px))
+    alpha = 1.0 - (1.0 - opacity) ** counts.astype(np.float64)
+    rgba = np.empty(counts.shape + (4,), dtype=np.float32)
+    rgba[..., :3] = to_rgb(color)
+    rgba[..., 3] = alpha
+    return rgba
+
+
+_RC = {"svg.fonttype": "none", "svg.hashsalt": "meshplan", "pdf.compression": 6, "path.simplify": True}
+
+
+def figure_bytes(fig, fmt: str) -> bytes:
+    """Render a figure to PNG, SVG or PDF bytes, without timestamps (byte-reproducible)."""
+    import matplotlib
+
+    meta = {"png": {"Software": "meshplan"}, "svg": {"Date": None, "Creator": "meshplan"}, "pdf": {"CreationDate": None, "Creator": "meshplan", "Producer": "meshplan"}}[fmt]
+    buf = io.BytesIO()
+    with matplotlib.rc_context(_RC):
+        kwargs = {"pil_kwargs": {"compress_level": 4}} if fmt == "png" else {}
+        fig.savefig(buf, format=fmt, metadata=meta, **kwargs)
+    return buf.getvalue()

@@ -1,0 +1,8 @@
+"""Flat walls: wall directions, the box-shaped DBSCAN and the wall rectangles (paper,
+"Computing flat walls")."""
+
+from .boxdbscan import BoxDBSCAN, box_dbscan
+from .flat import FlatWalls, find_flat_walls, wall_directions
+from .params import WallParams
+
+__all__ = ["BoxDBSCAN", "FlatWalls", "WallParams", "box_dbscan", "find_flat_walls", "wall_directions"]

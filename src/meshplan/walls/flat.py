@@ -1,0 +1,271 @@
+"""Flat walls (paper, Algorithm 3, lines 2-13): wall directions, box DBSCAN, filtering, plane
+fitting, rectangle construction and mesh replacement.
+
+For each story and wall direction, the centroids of the triangles facing that way are clustered
+by :func:`~meshplan.walls.boxdbscan.box_dbscan` in wall coordinates (along the wall, across it,
+up). A cluster is a *wall segment*; it is kept when it is long enough and reaches near the floor
+and near the ceiling. Its plane faces the wall direction and passes through the area-weighted
+median of the centroids across the wall; its rectangle spans the segment's triangles along the
+wall and in height. Coplanar rectangles of one direction separated by less than ``merge_gap_m``
+are one wall, so that a door or a missing strip does not split it (an addition to the paper).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..geometry import FloatArray, IntArray, Mesh
+from ..orient import Orientation, Story
+from .boxdbscan import box_dbscan
+from .params import WallParams
+
+
+@dataclass(frozen=True, eq=False)
+class FlatWalls:
+    """Flat wall rectangles of every story, as parallel arrays (one row per wall).
+
+    A wall lies in the vertical plane ``normal . (x, z) = offset`` and spans ``[u_min, u_max]``
+    along ``tangent = (-normal_z, normal_x)`` and ``[bottom, top]`` in height. ``normal`` points
+    into the room the face was scanned from.
+
+    Attributes
+    ----------
+    face_segment
+        ``(F,)`` DBSCAN segment of every face of the mesh, -1 for faces in none (for the
+        segment drawings); ``segment_kept`` says which segments became walls.
+    """
+
+    story: IntArray
+    direction: IntArray
+    normal: FloatArray
+    offset: FloatArray
+    u_min: FloatArray
+    u_max: FloatArray
+    bottom: FloatArray
+    top: FloatArray
+    support: IntArray
+    area: FloatArray
+    directions: FloatArray
+    face_segment: IntArray
+    segment_story: IntArray
+    segment_kept: np.ndarray
+
+    def __len__(self) -> int:
+        return int(len(self.story))
+
+    @property
+    def tangent(self) -> FloatArray:
+        return np.c_[-self.normal[:, 1], self.normal[:, 0]]
+
+    @property
+    def start(self) -> FloatArray:
+        """``(W, 2)`` plan coordinates [x, z] of one end."""
+        return self.u_min[:, None] * self.tangent + self.offset[:, None] * self.normal
+
+    @property
+    def end(self) -> FloatArray:
+        return self.u_max[:, None] * self.tangent + self.offset[:, None] * self.normal
+
+    @property
+    def length(self) -> FloatArray:
+        return self.u_max - self.u_min
+
+    def select(self, mask: np.ndarray) -> FlatWalls:
+        """The walls where ``mask`` is true (per-face data unchanged)."""
+        fields = ("story", "direction", "normal", "offset", "u_min", "u_max", "bottom", "top", "support", "area")
+        kw = {f: getattr(self, f)[mask] for f in fields}
+        return FlatWalls(
+            **kw,
+            directions=self.directions,
+            face_segment=self.face_segment,
+            segment_story=self.segment_story,
+            segment_kept=self.segment_kept,
+        )
+
+    def mesh(self, story: int | None = None) -> Mesh:
+        """The mesh replacement: two triangles per rectangle, normals into the rooms."""
+        sel = np.ones(len(self), bool) if story is None else self.story == story
+        s, e = self.start[sel], self.end[sel]
+        b, t = self.bottom[sel], self.top[sel]
+        n = len(s)
+        v = np.empty((n, 4, 3))
+        v[:, 0] = np.c_[s[:, 0], b, s[:, 1]]
+        v[:, 1] = np.c_[e[:, 0], b, e[:, 1]]
+        v[:, 2] = np.c_[e[:, 0], t, e[:, 1]]
+        v[:, 3] = np.c_[s[:, 0], t, s[:, 1]]
+        base = (np.arange(n) * 4)[:, None]
+        # (start, top, end) turns the normal towards +normal: see tests
+        faces = np.concatenate([base + [0, 3, 2], base + [0, 2, 1]])
+        return Mesh(v.reshape(-1, 3), faces)
+
+    def to_list(self, ndigits: int = 4) -> list[dict]:
+        """JSON-ready walls for plan.json."""
+        r = lambda a: np.round(np.asarray(a, dtype=np.float64), ndigits).tolist()  # noqa: E731
+        s, e = self.start, self.end
+        return [
+            {
+                "story": int(self.story[i]),
+                "start": r(s[i]),
+                "end": r(e[i]),
+                "normal": r(self.normal[i]),
+                "length": round(float(self.length[i]), ndigits),
+                "bottom": round(float(self.bottom[i]), ndigits),
+                "top": round(float(self.top[i]), ndigits),
+                "points": int(self.support[i]),
+            }
+            for i in range(len(self))
+        ]
+
+
+def wall_directions(orientation: Orientation, mode: str) -> FloatArray:
+    """``(D, 2)`` unit plan normals [nx, nz] the DBSCAN runs on.
+
+    The principal directions are the exact axes (the alignment put the dominant walls on
+    them); other directions are the k-means centres.
+    """
+    axes = np.array([[1.0, 0.0], [0.0, 1.0], [-1.0, 0.0], [0.0, -1.0]])
+    others = [d.normal[[0, 2]] for d in orientation.alignment.directions if not d.principal]
+    if mode == "principal" or (mode == "auto" and not others):
+        return axes
+    out = [a for a in axes]
+    for o in others:
+        o = o / np.linalg.norm(o)
+        if all(o @ a < np.cos(np.radians(10.0)) for a in out):
+            out.append(o)
+    return np.array(out)
+
+
+def _group_minmax(labels: IntArray, values: FloatArray, k: int) -> tuple[FloatArray, FloatArray]:
+    lo = np.full(k, np.inf)
+    hi = np.full(k, -np.inf)
+    np.minimum.at(lo, labels, values)
+    np.maximum.at(hi, labels, values)
+    return lo, hi
+
+
+def _group_weighted_median(labels: IntArray, values: FloatArray, weights: FloatArray, k: int) -> FloatArray:
+    order = np.lexsort((values, labels))
+    lab, val, w = labels[order], values[order], weights[order]
+    cw = np.cumsum(w)
+    start = np.searchsorted(lab, np.arange(k))
+    end = np.searchsorted(lab, np.arange(k), side="right")
+    before = np.where(start > 0, cw[np.maximum(start - 1, 0)], 0.0)
+    total = cw[end - 1] - before
+    target = before + 0.5 * total
+    idx = np.searchsorted(cw, target)
+    return val[np.clip(idx, start, end - 1)]
+
+
+def _merge(rows: list[dict], depth_half: float, gap: float) -> list[dict]:
+    """Merge coplanar rectangles (one story, one direction) whose ends are close."""
+    rows = sorted(rows, key=lambda r: (r["offset"], r["u_min"]))
+    changed = True
+    while changed:
+        changed = False
+        rows.sort(key=lambda r: (r["u_min"], r["offset"]))
+        out: list[dict] = []
+        for r in rows:
+            for o in out:
+                if abs(o["offset"] - r["offset"]) <= depth_half and r["u_min"] <= o["u_max"] + gap and o["u_min"] <= r["u_max"] + gap:
+                    total = o["area"] + r["area"]
+                    o["offset"] = (o["offset"] * o["area"] + r["offset"] * r["area"]) / total
+                    o["u_min"], o["u_max"] = min(o["u_min"], r["u_min"]), max(o["u_max"], r["u_max"])
+                    o["bottom"], o["top"] = min(o["bottom"], r["bottom"]), max(o["top"], r["top"])
+                    o["support"] += r["support"]
+                    o["area"] = total
+                    changed = True
+                    break
+            else:
+                out.append(dict(r))
+        rows = out
+    return rows
+
+
+def find_flat_walls(mesh: Mesh, orientation: Orientation, params: WallParams | None = None) -> FlatWalls:
+    """Flat walls of every story of an oriented mesh.
+
+    Parameters
+    ----------
+    mesh
+        The mesh in the plan frame, normals facing into the rooms.
+    orientation
+        Stories and wall directions from :func:`meshplan.orient.orient`.
+    params
+        Wall parameters; the paper's defaults when omitted.
+    """
+    params = params or WallParams()
+    dirs = wall_directions(orientation, params.wall_directions)
+    normals, centroids, areas = mesh.face_normals, mesh.face_centroids, mesh.face_areas
+    tri = mesh.triangles
+    cos_tol = np.cos(np.radians(params.facing_tolerance_deg))
+    face_segment = np.full(mesh.n_faces, -1, dtype=np.int64)
+    seg_story: list[int] = []
+    seg_kept: list[bool] = []
+    rows: list[dict] = []
+    for story in orientation.stories:
+        in_story = (orientation.face_story == story.index) & (centroids[:, 1] > story.floor) & (centroids[:, 1] < story.ceiling)
+        height = params.box_height_m or story.height
+        half = np.array([params.box_length_m / 2, params.box_depth_m / 2, height / 2])
+        for d_index, d in enumerate(dirs):
+            n3 = np.array([d[0], 0.0, d[1]])
+            t3 = np.array([-d[1], 0.0, d[0]])
+            idx = np.flatnonzero(in_story & (normals @ n3 >= cos_tol))
+            if len(idx) < params.min_points:
+                continue
+            c = centroids[idx]
+            pts = np.c_[c @ t3, c @ n3, c[:, 1]]
+            labels, _ = box_dbscan(pts, half, params.min_points)
+            k = int(labels.max()) + 1
+            if k == 0:
+                continue
+            ok = labels >= 0
+            lab, fidx = labels[ok], idx[ok]
+            face_segment[fidx] = lab + len(seg_story)
+            verts = tri[fidx]  # (n, 3, 3)
+            u_lo, u_hi = _group_minmax(np.repeat(lab, 3), (verts @ t3).reshape(-1), k)
+            y_lo, y_hi = _group_minmax(np.repeat(lab, 3), verts[..., 1].reshape(-1), k)
+            offset = _group_weighted_median(lab, pts[ok, 1], areas[fidx], k)
+            support = np.bincount(lab, minlength=k)
+            area = np.bincount(lab, weights=areas[fidx], minlength=k)
+            keep = (
+                (u_hi - u_lo >= params.min_wall_length_m)
+                & (y_lo <= story.floor + params.floor_reach_m)
+                & (y_hi >= story.ceiling - params.ceiling_reach_m)
+            )
+            seg_story.extend([story.index] * k)
+            seg_kept.extend(keep.tolist())
+            found = [
+                {
+                    "story": story.index,
+                    "direction": d_index,
+                    "offset": float(offset[j]),
+                    "u_min": float(u_lo[j]),
+                    "u_max": float(u_hi[j]),
+                    "bottom": float(y_lo[j]),
+                    "top": float(y_hi[j]),
+                    "support": int(support[j]),
+                    "area": float(area[j]),
+                }
+                for j in np.flatnonzero(keep)
+            ]
+            rows.extend(_merge(found, params.box_depth_m / 2, params.merge_gap_m))
+    rows.sort(key=lambda r: (r["story"], r["direction"], r["offset"], r["u_min"]))
+    col = lambda key, dtype=np.float64: np.array([r[key] for r in rows], dtype=dtype)  # noqa: E731
+    return FlatWalls(
+        story=col("story", np.int64),
+        direction=col("direction", np.int64),
+        normal=dirs[col("direction", np.int64)] if rows else np.zeros((0, 2)),
+        offset=col("offset"),
+        u_min=col("u_min"),
+        u_max=col("u_max"),
+        bottom=col("bottom"),
+        top=col("top"),
+        support=col("support", np.int64),
+        area=col("area"),
+        directions=dirs,
+        face_segment=face_segment,
+        segment_story=np.array(seg_story, dtype=np.int64),
+        segment_kept=np.array(seg_kept, dtype=bool),
+    )

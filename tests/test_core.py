@@ -1,0 +1,173 @@
+"""Geometry kernels: rigid transforms, spherical k-means, box DBSCAN, slicing."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from sklearn.cluster import DBSCAN
+
+from meshplan.errors import ParameterError
+from meshplan.geometry import Annotations, Mesh, is_rigid, rotation_about_y, rotation_between, homogeneous
+from meshplan.slicing import plane_heights, slice_mesh
+from meshplan.sphere import axial_peaks, to_spherical, trimmed_spherical_kmeans
+from meshplan.walls import BoxDBSCAN, box_dbscan
+
+from conftest import angle_deg
+
+
+def random_rotation(rng) -> np.ndarray:
+    q = rng.normal(size=4)
+    q /= np.linalg.norm(q)
+    w, x, y, z = q
+    return np.array([
+        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+    ])
+
+
+def test_rotation_between_maps_and_is_rigid():
+    rng = np.random.default_rng(0)
+    for _ in range(50):
+        a, b = rng.normal(size=3), rng.normal(size=3)
+        r = rotation_between(a, b)
+        assert np.allclose(r @ (a / np.linalg.norm(a)), b / np.linalg.norm(b))
+        assert is_rigid(homogeneous(r))
+    assert np.allclose(rotation_between([0, 1, 0], [0, -1, 0]) @ [0, 1, 0], [0, -1, 0])
+    assert np.allclose(rotation_about_y(np.pi / 2) @ [1, 0, 0], [0, 0, -1])
+
+
+def test_mesh_transform_keeps_normals_and_areas():
+    v = np.array([[0, 0, 0], [1, 0, 0], [0, 0, 1.0]])
+    m = Mesh(v, [[0, 2, 1]])
+    assert np.allclose(m.face_normals, [[0, 1, 0]])
+    rng = np.random.default_rng(1)
+    r = random_rotation(rng)
+    t = m.transformed(homogeneous(r, [1, 2, 3]))
+    assert np.allclose(t.face_normals, (r @ [0, 1, 0])[None])
+    assert t.area == pytest.approx(m.area)
+    # a mirror keeps normals on the same side of the surface
+    mirror = np.diag([-1.0, 1, 1, 1])
+    assert np.allclose(m.transformed(mirror).face_normals, [[0, 1, 0]])
+
+
+def test_annotations_transform():
+    ann = Annotations(("S1",), ("sensor",), [[1, 0, 0]], [[0, 0, 1]])
+    m = homogeneous(rotation_about_y(np.pi / 2), [0, 5, 0])
+    out = ann.transformed(m)
+    assert np.allclose(out.positions, [[0, 5, -1]])
+    assert np.allclose(out.directions, [[1, 0, 0]])
+    with pytest.raises(ValueError):
+        Annotations(("S1",), ("lamp",), [[0, 0, 0]], [[np.nan] * 3])
+
+
+def test_spherical_coordinates_match_the_paper():
+    theta, phi = to_spherical(np.array([[1, 0, 0], [0, 0, 1], [0, 1, 0], [0, -1, 0]]))
+    assert np.allclose(theta[:2], [0, 90])
+    assert np.allclose(phi, [90, 90, 180, 0])
+
+
+def _noisy_directions(rng, centres, n, sigma_deg, outliers):
+    pts = []
+    for c in centres:
+        d = c + rng.normal(scale=np.radians(sigma_deg), size=(n, 3))
+        pts.append(d / np.linalg.norm(d, axis=1, keepdims=True))
+    o = rng.normal(size=(outliers, 3))
+    pts.append(o / np.linalg.norm(o, axis=1, keepdims=True))
+    return np.concatenate(pts)
+
+
+def test_trimmed_kmeans_recovers_wall_directions_despite_outliers():
+    rng = np.random.default_rng(2)
+    yaw = np.radians(17.0)
+    centres = np.array([[np.cos(yaw + k * np.pi / 2), 0, np.sin(yaw + k * np.pi / 2)] for k in range(4)])
+    x = _noisy_directions(rng, centres, 20000, 6.0, 40000)  # half the data is clutter
+    init = np.array([[np.cos(k * np.pi / 2), 0, np.sin(k * np.pi / 2)] for k in range(4)])
+    res = trimmed_spherical_kmeans(x, None, init)
+    for c in centres:
+        assert min(angle_deg(c, r) for r in res.centers) < 0.3
+    # without trimming, the clutter drags the centres away
+    plain = trimmed_spherical_kmeans(x, None, init, schedule_deg=())
+    assert max(min(angle_deg(c, r) for r in plain.centers) for c in centres) > 0.3
+    assert (res.labels >= 0).sum() < len(x) / 2
+
+
+def test_axial_peaks_ignore_the_sign():
+    rng = np.random.default_rng(3)
+    up = np.array([0.3, 0.9, 0.2])
+    up /= np.linalg.norm(up)
+    x = _noisy_directions(rng, [up, -up], 3000, 3.0, 1000)
+    peaks = axial_peaks(x, np.ones(len(x)))
+    assert angle_deg(peaks[0].axis, up) < 1.0 or angle_deg(peaks[0].axis, -up) < 1.0
+
+
+# --------------------------------------------------------------------------------------------
+# box DBSCAN
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_box_dbscan_equals_textbook_dbscan_with_chebyshev(seed):
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(30, 1200))
+    pts = np.c_[rng.uniform(0, 4, n), rng.normal(0, 0.04, n) + rng.integers(0, 3, n) * 0.25, rng.uniform(0, 2.6, n)]
+    if seed % 3 == 0:
+        pts = np.round(pts * 20) / 20  # many points exactly on box boundaries
+    half = np.array([0.2286, 0.0508, 1.3])
+    m = int(rng.integers(1, 12))
+    labels, core = box_dbscan(pts, half, m)
+    ref = DBSCAN(eps=1.0, min_samples=m, metric="chebyshev").fit(pts / half)
+    ref_core = np.zeros(n, bool)
+    ref_core[ref.core_sample_indices_] = True
+    assert np.array_equal(core, ref_core)
+    assert np.array_equal(labels == -1, ref.labels_ == -1)
+    # the core points are partitioned identically
+    pairs = set(zip(labels[core], ref.labels_[core]))
+    assert len(pairs) == len(set(labels[core])) == len(set(ref.labels_[core]))
+    mapping = dict(pairs)
+    # a border point belongs to the cluster of one of its core neighbours
+    scaled = pts / half
+    for i in np.flatnonzero(~core & (labels >= 0)):
+        near = core & (np.abs(scaled - scaled[i]).max(axis=1) <= 1.0)
+        assert mapping.get(labels[i], labels[i]) in set(ref.labels_[near])
+
+
+def test_box_dbscan_estimator_and_errors():
+    pts = np.array([[0, 0, 0], [0.2, 0, 0], [0.4, 0, 0], [5, 0, 0]])
+    assert BoxDBSCAN((0.25, 0.05, 1.0), 2).fit_predict(pts).tolist() == [0, 0, 0, -1]
+    with pytest.raises(ParameterError):
+        box_dbscan(pts, (0, 1, 1), 2)
+    with pytest.raises(ParameterError):
+        box_dbscan(pts, (1, 1, 1), 0)
+    assert len(box_dbscan(np.zeros((0, 3)), (1, 1, 1), 3)[0]) == 0
+
+
+# --------------------------------------------------------------------------------------------
+# slicing
+
+
+def test_slicing_a_box_reproduces_its_walls():
+    from conftest import box_room
+
+    v, f = box_room(5.0, 4.0, 2.6, cell=0.1)
+    m = Mesh(v, f)
+    s = slice_mesh(m.triangles, plane_heights(0.0, 2.6, 100))
+    assert set(np.unique(s.level)) == set(range(1, 101))  # the floor plane touches only the floor
+    for i in (10, 50, 99):
+        seg = s.at(i)
+        length = np.linalg.norm(seg[:, 1] - seg[:, 0], axis=1).sum()
+        assert length == pytest.approx(2 * (5.0 + 4.0), rel=1e-9)
+        pts = seg.reshape(-1, 2)
+        on_wall = np.minimum.reduce([np.abs(pts[:, 0]), np.abs(pts[:, 0] - 5), np.abs(pts[:, 1]), np.abs(pts[:, 1] - 4)])
+        assert on_wall.max() < 1e-9
+
+
+def test_slicing_is_exact_on_a_tilted_triangle():
+    tri = np.array([[[0, 0, 0], [2, 1, 0], [0, 2, 2]]], float)
+    s = slice_mesh(tri, [0.5, 1.0, 1.5])
+    assert len(s) == 3
+    for seg, h in zip(s.segments, [0.5, 1.0, 1.5]):
+        # points on the triangle's plane at height h: check both ends lie on its edges
+        for p in seg:
+            assert 0 <= p[0] <= 2 and 0 <= p[1] <= 2
+    with pytest.raises(ParameterError):
+        plane_heights(0, 1, 0)

@@ -1,0 +1,165 @@
+"""Reading meshes and annotations: formats, clean-up counts, units and clear errors."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+import trimesh
+
+from meshplan.errors import AnnotationError, InputError, ParameterError
+from meshplan.geometry import Mesh
+from meshplan.io import load_annotations, load_mesh
+from meshplan.io.annotations import annotations_document, parse_annotations
+from meshplan.export.synth import obj_text
+
+from conftest import box_room
+
+
+@pytest.fixture(scope="module")
+def room():
+    v, f = box_room(4.0, 3.0, 2.5, cell=0.25)
+    return Mesh(v, f)
+
+
+@pytest.mark.parametrize("fmt", ["obj", "ply", "stl", "off", "glb"])
+def test_formats_round_trip(tmp_path, room, fmt):
+    path = tmp_path / f"room.{fmt}"
+    data = trimesh.Trimesh(room.vertices, room.faces, process=False).export(file_type=fmt)
+    path.write_bytes(data if isinstance(data, bytes) else data.encode())
+    loaded = load_mesh(path)
+    assert loaded.mesh.n_faces == room.n_faces
+    assert loaded.stats.dropped_faces == 0
+    assert loaded.mesh.area == pytest.approx(room.area, rel=1e-5)
+    assert np.allclose(loaded.mesh.bounds(), room.bounds(), atol=1e-5)
+
+
+def test_ascii_ply(tmp_path, room):
+    path = tmp_path / "room.ply"
+    path.write_bytes(trimesh.Trimesh(room.vertices, room.faces, process=False).export(file_type="ply", encoding="ascii"))
+    assert path.read_bytes().startswith(b"ply\nformat ascii")
+    assert load_mesh(path).mesh.n_faces == room.n_faces
+
+
+def test_multi_object_obj_is_flattened(tmp_path, room):
+    groups = (room.face_centroids[:, 1] > 1.0).astype(int)  # two objects, each with own vertices
+    path = tmp_path / "hololens.obj"
+    path.write_text(obj_text(room.vertices, room.faces, groups, ("lower", "upper")))
+    loaded = load_mesh(path)
+    assert loaded.stats.objects == 2
+    assert loaded.mesh.n_faces == room.n_faces
+    # coincident vertices of the two objects are merged: the room is one connected surface
+    assert loaded.mesh.n_vertices == len(np.unique(room.vertices, axis=0)) < loaded.stats.vertices_read
+
+
+def test_glb_node_transforms_are_applied(tmp_path, room):
+    scene = trimesh.Scene()
+    tm = trimesh.Trimesh(room.vertices, room.faces, process=False)
+    shift = np.eye(4)
+    shift[:3, 3] = [10.0, 0.0, -3.0]
+    scene.add_geometry(tm, transform=shift)
+    path = tmp_path / "scene.glb"
+    path.write_bytes(scene.export(file_type="glb"))
+    loaded = load_mesh(path)
+    assert np.allclose(loaded.mesh.bounds()[0], room.bounds()[0] + [10.0, 0.0, -3.0], atol=1e-5)
+
+
+def test_units_scale_to_metres(tmp_path, room):
+    path = tmp_path / "room_mm.ply"
+    path.write_bytes(trimesh.Trimesh(room.vertices * 1000, room.faces, process=False).export(file_type="ply"))
+    loaded = load_mesh(path, units="mm")
+    assert np.allclose(loaded.mesh.bounds(), room.bounds(), atol=1e-6)
+    assert loaded.stats.scale_to_m == 0.001
+    with pytest.raises(ParameterError, match="unknown unit"):
+        load_mesh(path, units="furlong")
+
+
+def test_bad_faces_are_dropped_and_counted(tmp_path):
+    v = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0], [np.nan, 0, 0], [2, 0, 0]], float)
+    f = np.array([
+        [0, 1, 2],  # good
+        [1, 3, 2],  # good
+        [2, 1, 0],  # duplicate of the first (other winding)
+        [0, 1, 4],  # NaN vertex
+        [0, 1, 5],  # collinear: zero area
+        [0, 0, 1],  # repeated vertex
+    ])
+    path = tmp_path / "bad.obj"
+    path.write_text("".join(f"v {a} {b} {c}\n" for a, b, c in v) + "".join(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in f))
+    st = load_mesh(path).stats
+    assert (st.faces, st.dropped_nonfinite, st.dropped_degenerate, st.dropped_duplicate) == (2, 1, 2, 1)
+    assert st.faces_read == 6
+
+
+@pytest.mark.parametrize(
+    "name, content, message",
+    [
+        ("missing.obj", None, "file not found"),
+        ("scan.xyz1", b"1 2 3", "unknown mesh format"),
+        ("empty.ply", b"", "the file is empty"),
+        ("garbage.ply", bytes(range(256)) * 10, "cannot be read as PLY"),
+        ("points.ply", b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nend_header\n0 0 0\n1 0 0\n0 1 0\n", "point cloud"),
+        ("degenerate.obj", b"v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n", "none of its 1 faces is usable"),
+    ],
+)
+def test_bad_files_give_clear_errors(tmp_path, name, content, message):
+    path = tmp_path / name
+    if content is not None:
+        path.write_bytes(content)
+    with pytest.raises(InputError, match=message) as info:
+        load_mesh(path)
+    assert "\n" not in info.value.message and ";" in info.value.message
+
+
+def test_directory_is_refused(tmp_path):
+    with pytest.raises(InputError, match="is a directory"):
+        load_mesh(tmp_path)
+
+
+def test_max_faces_is_checked_before_loading(tmp_path, room):
+    path = tmp_path / "room.ply"
+    path.write_bytes(trimesh.Trimesh(room.vertices, room.faces, process=False).export(file_type="ply"))
+    with pytest.raises(InputError, match=r"--max-faces"):
+        load_mesh(path, max_faces=100)
+
+
+# --------------------------------------------------------------------------------------------
+# annotations
+
+
+def _write(tmp_path, doc) -> object:
+    p = tmp_path / "ann.json"
+    p.write_text(doc if isinstance(doc, str) else json.dumps(doc))
+    return p
+
+
+def test_annotations_round_trip(tmp_path):
+    doc = {"annotations": [
+        {"label": "S1", "kind": "sensor", "position": [1, 2, 3], "direction": [0, 0, 2]},
+        {"label": "D1", "kind": "door", "position": [0, 1, 0]},
+    ]}
+    ann = load_annotations(_write(tmp_path, doc), scale_to_m=0.5)
+    assert ann.labels == ("S1", "D1")
+    assert np.allclose(ann.positions, [[0.5, 1, 1.5], [0, 0.5, 0]])
+    assert np.allclose(ann.directions[0], [0, 0, 1]) and np.all(np.isnan(ann.directions[1]))
+    again = parse_annotations(annotations_document(ann))
+    assert np.allclose(again.positions, ann.positions)
+
+
+@pytest.mark.parametrize(
+    "doc, message",
+    [
+        ("{not json", "not valid JSON"),
+        ({"items": []}, 'expected an object with an "annotations" list'),
+        ({"annotations": [{"kind": "sensor", "position": [0, 0, 0]}]}, "has no 'label'"),
+        ({"annotations": [{"label": "S1", "kind": "lamp", "position": [0, 0, 0]}]}, "unknown kind"),
+        ({"annotations": [{"label": "S1", "kind": "sensor", "position": [0, 0]}]}, "list of three numbers"),
+        ('{"annotations": [{"label": "S1", "kind": "sensor", "position": [NaN, 0, 0]}]}', "NaN or infinite"),
+        ({"annotations": [{"label": "S1", "kind": "sensor", "position": [0, 0, 0], "direction": [0, 0, 0]}]}, "zero vector"),
+        ({"annotations": [{"label": "S1", "kind": "sensor", "position": [0, 0, 0]}] * 2}, "duplicate label"),
+    ],
+)
+def test_malformed_annotations(tmp_path, doc, message):
+    with pytest.raises(AnnotationError, match=message):
+        load_annotations(_write(tmp_path, doc))
