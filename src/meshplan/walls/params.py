@@ -43,7 +43,10 @@ class WallParams:
         Segments shorter than this along the wall are discarded ("too small").
     floor_reach_m, ceiling_reach_m
         A segment is kept only when it comes within this distance of the floor and of the
-        ceiling ("walls ... near the floor ... near the ceiling").
+        ceiling ("walls ... near the floor ... near the ceiling"). Furniture rarely stands
+        higher than 2 m and ceilings are at least 2.4 m high, so 0.3 m below the ceiling
+        separates wardrobes from walls; the floor allowance is larger because furniture along
+        a wall hides its foot.
     merge_gap_m
         Coplanar segments of one direction whose ends are closer than this along the wall are
         one wall (an opening up to a wide door does not split a wall).
@@ -61,8 +64,8 @@ class WallParams:
     facing_tolerance_deg: float = 25.0
     wall_directions: str = "auto"
     min_wall_length_m: float = 0.4
-    floor_reach_m: float = 0.6
-    ceiling_reach_m: float = 0.6
+    floor_reach_m: float = 0.5
+    ceiling_reach_m: float = 0.3
     merge_gap_m: float = 1.5
     max_wall_thickness_m: float = 8 * INCH_M
     default_wall_thickness_m: float = 0.15
