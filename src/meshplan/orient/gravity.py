@@ -11,12 +11,16 @@ from the floor and ceiling structure:
    and the tops of furniture make the up axis the heaviest in almost every scan; a candidate whose
    two main parallel surfaces are closer than a room height (the walls of a corridor) is demoted,
    as is one whose surfaces are not spread along the axis at all (a single wall).
-2. *Sign.* Furniture stands on the floor and the lower part of a room is scanned more densely than
+2. *Refinement.* The paper's Method 2, with normals folded onto the axis' hemisphere so that
+   floors and ceilings both contribute whatever their winding (the sign does not matter yet).
+3. *Sign.* Furniture stands on the floor and the lower part of a room is scanned more densely than
    the upper part, so in the bottom third of each story the vertical surfaces cover much more of
-   the plan than in the top third. The sign that puts the busier band at the bottom is up. (The
-   normals cannot tell: they may face either way.)
-3. *Refinement.* The paper's Method 2, with normals folded onto the up hemisphere so that floors
-   and ceilings both contribute whatever their winding.
+   the plan than in the top third, and table tops, seats and sills lie in the lower half. The sign
+   that puts the busier part at the bottom is up (:func:`sign_evidence`). The normals cannot
+   tell: they may face either way.
+
+:func:`refine_with_slabs` then fits the floors' common normal to face positions (see
+``OrientParams.gravity_plane_fit``).
 """
 
 from __future__ import annotations
@@ -28,7 +32,7 @@ import numpy as np
 from ..errors import GeometryError
 from ..geometry import FloatArray, Mesh, unit
 from ..sphere import axial_peaks
-from .levels import find_spikes
+from .levels import _choose_stories, find_spikes
 from .params import OrientParams
 
 _AXES = {
@@ -67,37 +71,55 @@ class GravityEstimate:
     faces_used: int  # faces in the final cone of Method 2 (0 for Method 1)
 
 
-def _occupancy_sign(centroids: FloatArray, normals: FloatArray, areas: FloatArray, axis: FloatArray, params: OrientParams) -> float:
-    """Evidence that ``axis`` (rather than ``-axis``) points up: log of the ratio of the plan
-    cells covered by vertical surfaces in the bottom band of each story to those covered in the
-    top band."""
+def _story_intervals(h: FloatArray, horiz: np.ndarray, areas: FloatArray, params: OrientParams) -> list[tuple[float, float]]:
+    """Floor-to-ceiling intervals along an axis (either sign), as :func:`find_levels` pairs them;
+    the robust extent of the mesh when no pair is found (no ceiling)."""
+    spikes = find_spikes(h[horiz], areas[horiz], params.level_bucket_m, params.spike_fraction)
+    pairs = _choose_stories(spikes, params.min_room_height_m, params.max_story_height_m) if spikes else []
+    intervals = [(spikes[f].height, spikes[c].height) for f, c in pairs]
+    if not intervals:
+        lo, hi = np.quantile(h, [0.005, 0.995]) if len(h) > 1 else (0.0, 0.0)
+        if hi > lo:
+            intervals = [(float(lo), float(hi))]
+    return intervals
+
+
+def sign_evidence(centroids: FloatArray, normals: FloatArray, areas: FloatArray, axis: FloatArray, params: OrientParams) -> float:
+    """Evidence that ``axis`` (rather than ``-axis``) points up; positive supports ``axis``.
+
+    The sum of two log-ratios, each comparing the bottom part of every story with its top part:
+
+    * *occupancy*: plan cells (10 cm) covered by vertical surfaces in the band 10-40 % of the
+      story height against the band 60-90 % (furniture stands on the floor; scanners see the
+      lower walls better);
+    * *clutter*: area of horizontal surfaces between floor and ceiling in the lower half against
+      the upper half (table tops, seats, beds and sills are low; door heads are the main thing
+      high up).
+    """
     h = centroids @ axis
     nh = normals @ axis
     horiz = np.abs(nh) >= np.cos(np.radians(params.horizontal_tolerance_deg))
-    spikes = find_spikes(h[horiz], areas[horiz], params.level_bucket_m, 0.2)
-    slabs = sorted(s.height for s in spikes)
-    intervals = [(a, b) for a, b in zip(slabs[:-1], slabs[1:]) if b - a >= params.min_room_height_m]
+    intervals = _story_intervals(h, horiz, areas, params)
     if not intervals:
-        lo, hi = np.quantile(h, [0.005, 0.995]) if len(h) > 1 else (0.0, 0.0)
-        if hi - lo <= 0:
-            return 0.0
-        intervals = [(float(lo), float(hi))]
+        return 0.0
     e1 = unit(np.cross(axis, [1.0, 0.0, 0.0] if abs(axis[0]) < 0.9 else [0.0, 1.0, 0.0]))
     e2 = np.cross(axis, e1)
     vert = np.abs(nh) < np.cos(np.radians(45.0))
     cv, hv = centroids[vert], h[vert]
     plan = np.floor(np.c_[cv @ e1, cv @ e2] / _OCCUPANCY_CELL_M).astype(np.int64)
-    low = high = 0
+    key = plan[:, 0] * 1_000_003 + plan[:, 1]
+    occ = np.zeros(2)
+    clutter = np.zeros(2)
     for a, b in intervals:
         t = (hv - a) / (b - a)
-        for band, (t0, t1) in ((0, (0.1, 0.4)), (1, (0.6, 0.9))):
-            cells = plan[(t > t0) & (t < t1)]
-            n = len(np.unique(cells[:, 0] * 1_000_003 + cells[:, 1])) if len(cells) else 0
-            if band == 0:
-                low += n
-            else:
-                high += n
-    return float(np.log((low + 1.0) / (high + 1.0)))
+        occ[0] += len(np.unique(key[(t > 0.1) & (t < 0.4)]))
+        occ[1] += len(np.unique(key[(t > 0.6) & (t < 0.9)]))
+        th = (h - a) / (b - a)
+        mid = horiz & (th > 0.05) & (th < 0.95)
+        clutter[0] += areas[mid & (th < 0.5)].sum()
+        clutter[1] += areas[mid & (th >= 0.5)].sum()
+    eps = 0.01 * max(clutter.sum(), 1e-6)
+    return float(np.log((occ[0] + 1.0) / (occ[1] + 1.0)) + np.log((clutter[0] + eps) / (clutter[1] + eps)))
 
 
 def _plausibility(centroids: FloatArray, normals: FloatArray, areas: FloatArray, axis: FloatArray, params: OrientParams) -> float:
@@ -180,13 +202,15 @@ def estimate_gravity(mesh: Mesh, params: OrientParams) -> GravityEstimate:
             plaus = _plausibility(centroids, normals, areas, p.axis, params)
             candidates.append(Candidate(p.axis, p.weight, plaus, p.weight * plaus))
         best = max(candidates, key=lambda c: c.score)
-        axis = best.axis
-        evidence = _occupancy_sign(centroids, normals, areas, axis, params)
+        # the k-means refinement ignores the sign; decide it on the refined axis, whose levels
+        # are sharp (a rough axis a few degrees off smears them)
+        axis, _ = _refine_kmeans(normals, areas, best.axis, params.gravity_cones_deg)
+        evidence = sign_evidence(centroids, normals, areas, axis, params)
         if abs(evidence) < 0.05:
             # no evidence either way: follow the file's convention (its nearest axis points up)
             k = int(np.argmax(np.abs(axis)))
-            evidence = 0.0
             rough = axis if axis[k] > 0 else -axis
+            evidence = 0.0
         else:
             rough = axis if evidence > 0 else -axis
             evidence = abs(evidence)

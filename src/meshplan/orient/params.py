@@ -33,10 +33,12 @@ class OrientParams:
     gravity_cones_deg
         Cone half-angles of Method 2, from wide to narrow (paper: from 30 down to 3 degrees).
     gravity_plane_fit
-        After Method 2, refine up as the common normal of the floor and ceiling slabs fitted
-        to the face *positions* (least squares over every slab at once). Positions average
-        over metres of baseline where normals average over centimetre triangles, so this is
-        several times more precise on noisy scans. Not in the paper; off reproduces it.
+        After Method 2, refine up as the common normal of the floors of all stories, fitted to
+        the face *positions* (least squares over every floor at once). Positions average over
+        metres of baseline where normals average over centimetre triangles, so this is several
+        times more precise on noisy scans (median 0.05 degrees instead of 0.4 on the synthetic
+        rooms). Ceilings are left out: on real scans their soffits, fixtures and drift made the
+        fit worse. Not in the paper; off reproduces it.
     horizontal_tolerance_deg
         A face is horizontal (floor, ceiling, table top) when its normal is within this angle of
         the vertical ("a small angle" in the paper).

@@ -1,0 +1,130 @@
+"""Orientation against ground truth: gravity, wall alignment, floor and ceiling heights, stories."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from meshplan.errors import GeometryError
+from meshplan.geometry import Mesh, homogeneous, is_rigid
+from meshplan.io import load_mesh
+from meshplan.orient import OrientParams, orient
+from meshplan.synthetic import SynthParams, generate
+
+from conftest import REAL_SCANS, angle_deg, box_room, real_scan
+
+
+def errors(orientation, truth) -> tuple[float, float, list[float]]:
+    """Gravity error (deg), yaw error modulo 90 deg, and |height errors| of every floor/ceiling."""
+    t = np.array(truth["transform"])
+    p = orientation.transform @ t  # truth frame -> plan frame
+    gravity = angle_deg(p[:3, :3] @ [0, 1, 0], [0, 1, 0])
+    x = p[:3, :3] @ [1, 0, 0]
+    yaw = np.degrees(np.arctan2(x[2], x[0])) % 90.0
+    yaw = min(yaw, 90.0 - yaw)
+    heights = []
+    centre = np.mean(np.array(truth["rooms"][0]["polygon"]), axis=0)
+    for st, ts in zip(orientation.stories, truth["stories"]):
+        for plan_h, true_h in ((st.floor, ts["floor"]), (st.ceiling, ts["ceiling"])):
+            heights.append(abs((p @ [centre[0], true_h, centre[1], 1.0])[1] - plan_h))
+    return gravity, yaw, heights
+
+
+CASES = [
+    dict(preset="room", seed=1),
+    dict(preset="room", seed=2, z_up=True),
+    dict(preset="room", seed=4, tilt_deg=6.0, yaw_deg=44.0),
+    dict(preset="apartment", seed=0),
+    dict(preset="apartment", seed=1, z_up=True, tilt_deg=5.5),
+    dict(preset="apartment", seed=2, winding="outward"),
+    dict(preset="apartment", seed=3, winding="mixed", yaw_deg=0.0, tilt_deg=0.0),
+    dict(preset="office", seed=1, tilt_deg=3.0, yaw_deg=89.0),
+    dict(preset="office", seed=2, z_up=True),
+    dict(preset="multistory", seed=0),
+    dict(preset="multistory", seed=1, stories=3, z_up=True),
+]
+
+
+@pytest.mark.parametrize("case", CASES, ids=lambda c: "-".join(f"{k}={v}" for k, v in c.items()))
+def test_orientation_matches_ground_truth(case):
+    scan = generate(SynthParams(**case))
+    o = orient(scan.mesh)
+    assert is_rigid(o.transform)
+    assert len(o.stories) == len(scan.truth["stories"])
+    gravity, yaw, heights = errors(o, scan.truth)
+    assert gravity < 0.2
+    assert yaw < 0.3
+    assert max(heights) < 0.02
+    assert all(s.ceiling_found for s in o.stories)
+    # the lowest floor is the origin of heights
+    assert o.stories[0].floor == pytest.approx(0.0, abs=1e-9)
+
+
+def test_bbox_method_is_available_and_rougher():
+    scan = generate(SynthParams(preset="apartment", seed=0, tilt_deg=4.0))
+    o = orient(scan.mesh, OrientParams(gravity_method="bbox"))
+    gravity, _, _ = errors(o, scan.truth)
+    assert gravity < 6.0  # the bounding box follows the building, not gravity
+
+
+def test_explicit_up_axis():
+    scan = generate(SynthParams(preset="room", seed=3, z_up=True))
+    o = orient(scan.mesh, OrientParams(up="+z"))
+    assert errors(o, scan.truth)[0] < 0.2
+
+
+def test_no_ceiling_uses_default_height():
+    v, f = box_room(5.0, 4.0, 2.7, cell=0.1)
+    m = Mesh(v, f)
+    keep = ~((np.abs(m.face_normals[:, 1]) > 0.9) & (m.face_centroids[:, 1] > 2.0))
+    o = orient(m.submesh(keep), OrientParams(up="+y", default_ceiling_height_m=2.4))
+    assert len(o.stories) == 1 and not o.stories[0].ceiling_found
+    assert o.stories[0].height == pytest.approx(2.4)
+    assert "no ceiling" in o.warnings[0]
+
+
+def test_implausible_units_are_reported():
+    v, f = box_room(5.0, 4.0, 2.7, cell=0.2)
+    with pytest.raises(GeometryError, match="--units mm"):
+        orient(Mesh(v * 1000.0, f))
+
+
+def test_single_wall_is_not_a_building():
+    v = np.array([[0, 0, 0], [4, 0, 0], [4, 2.5, 0], [0, 2.5, 0]], float)
+    with pytest.raises(GeometryError):
+        orient(Mesh(v, [[0, 1, 2], [0, 2, 3]]))
+
+
+def test_rigid_motion_of_the_input_moves_the_transform():
+    scan = generate(SynthParams(preset="apartment", seed=5))
+    rng = np.random.default_rng(0)
+    from test_core import random_rotation
+
+    move = homogeneous(random_rotation(rng), rng.normal(size=3) * 5)
+    a = orient(scan.mesh)
+    b = orient(scan.mesh.transformed(move))
+    # the same building: plan frames differ at most by a quarter turn about y and a shift
+    rel = b.transform @ move @ np.linalg.inv(a.transform)
+    assert angle_deg(rel[:3, :3] @ [0, 1, 0], [0, 1, 0]) < 0.05
+    x = rel[:3, :3] @ [1, 0, 0]
+    yaw = np.degrees(np.arctan2(x[2], x[0])) % 90.0
+    assert min(yaw, 90 - yaw) < 0.05
+    assert [round(s.height, 3) for s in a.stories] == [round(s.height, 3) for s in b.stories]
+
+
+@pytest.mark.parametrize("name", sorted(REAL_SCANS))
+def test_real_scans(name):
+    spec = REAL_SCANS[name]
+    mesh = load_mesh(real_scan(name)).mesh
+    o = orient(mesh)
+    up_truth = np.asarray(spec["up"], float)
+    up_found = o.transform[1, :3]  # row 1 of the rotation: up in input coordinates
+    assert angle_deg(up_found, up_truth) < 2.0
+    assert len(o.stories) == len(spec["stories"])
+    offset = o.transform[1, 3]  # plan height = input height along up + offset
+    for st, (floor, ceiling) in zip(o.stories, spec["stories"]):
+        assert abs(st.floor - offset - floor) < 0.05
+        if ceiling is None:
+            assert not st.ceiling_found
+        else:
+            assert abs(st.ceiling - offset - ceiling) < 0.05
