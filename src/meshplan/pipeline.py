@@ -156,7 +156,7 @@ def compute(
             plans.append(
                 StoryPlans(
                     story=story,
-                    pen_and_ink=pen_and_ink(plan_mesh, orientation, story, options.plan),
+                    pen_and_ink=pen_and_ink(plan_mesh, orientation, story, options.plan, options.orient.slab_tolerance_m),
                     drafting=drafting(walls, story, options.plan),
                     annotations=story_ann,
                 )

@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..io import staged_directory
-from ..orient import below_ceiling
+from ..orient import without_ceiling
 from ..render import (
     drafting_figure,
     figure_bytes,
@@ -63,7 +63,7 @@ def render_files(result: Result, timer: _Timer | None = None) -> dict[str, bytes
         files["oriented.glb"] = glb_bytes(mesh, result.annotations, "scan")
         for sp in result.stories:
             i = sp.story.index
-            keep = (o.face_story == i) & below_ceiling(heights, sp.story, result.options.orient.ceiling_clearance_m)
+            keep = (o.face_story == i) & without_ceiling(heights, mesh.face_normals[:, 1], sp.story, result.options.orient.slab_tolerance_m)
             files[f"story-{i}.glb"] = glb_bytes(mesh.submesh(np.flatnonzero(keep)), sp.annotations, f"story {i}")
             files[f"flat-walls-{i}.glb"] = glb_bytes(result.walls.mesh(i), sp.annotations, f"flat walls {i}", WALL_RGBA)
             faces = np.flatnonzero(o.face_story == i)

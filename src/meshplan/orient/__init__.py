@@ -20,7 +20,7 @@ from .facing import face_components, inward_flips
 from .gravity import GravityEstimate, estimate_gravity, refine_with_slabs
 from .levels import Levels, StoryLevels, find_levels
 from .params import GRAVITY_METHODS, UP_CHOICES, OrientParams
-from .stories import Story, assign_faces, below_ceiling, split_stories
+from .stories import Story, assign_faces, slab_faces, split_stories, without_ceiling
 
 __all__ = [
     "GRAVITY_METHODS",
@@ -34,9 +34,10 @@ __all__ = [
     "WallAlignment",
     "WallDirection",
     "assign_faces",
-    "below_ceiling",
     "face_components",
     "orient",
+    "slab_faces",
+    "without_ceiling",
 ]
 
 #: Largest plausible median triangle size (m): HoloLens and phone scans make 1-10 cm triangles.

@@ -71,9 +71,10 @@ class OrientParams:
         alignment (the paper's optional removal of floors and ceilings).
     extra_direction_fraction
         Share of the wall area that a non-principal wall direction must hold to be kept.
-    ceiling_clearance_m
-        Faces within this distance below a story's ceiling (and above) are removed from the
-        ceiling-less story model.
+    slab_tolerance_m
+        Near-horizontal faces within this distance of a floor or ceiling height are floor or
+        ceiling surfaces: removed before the plans are sliced (paper, Algorithm 1,
+        ``RemoveCeilingsAndFloors``) and, for the ceiling, from the story models.
     """
 
     up: str = "auto"
@@ -93,7 +94,7 @@ class OrientParams:
     keep_horizontal: bool = False
     wall_exclusion_deg: float = 30.0
     extra_direction_fraction: float = 0.08
-    ceiling_clearance_m: float = 0.1
+    slab_tolerance_m: float = 0.1
 
     def __post_init__(self) -> None:
         if self.up not in UP_CHOICES:
@@ -111,7 +112,7 @@ class OrientParams:
             "wall_exclusion_deg",
         ):
             check_positive(name, getattr(self, name))
-        for name in ("floor_group_m", "ceiling_group_m", "ceiling_clearance_m", "spike_fraction", "extra_direction_fraction"):
+        for name in ("floor_group_m", "ceiling_group_m", "slab_tolerance_m", "spike_fraction", "extra_direction_fraction"):
             check_positive(name, getattr(self, name), allow_zero=True)
         if self.max_story_height_m <= self.min_room_height_m:
             raise ParameterError(

@@ -57,6 +57,29 @@ def assign_faces(heights: FloatArray, stories: tuple[Story, ...]) -> IntArray:
     return np.searchsorted(bounds, heights, side="right").astype(np.int64)
 
 
-def below_ceiling(heights: FloatArray, story: Story, clearance_m: float) -> np.ndarray:
-    """Faces of a story that stay when its ceiling is removed (a view from above shows the rooms)."""
-    return heights < story.ceiling - clearance_m
+def slab_faces(
+    heights: FloatArray,
+    normal_y: FloatArray,
+    stories: tuple[Story, ...],
+    tolerance_m: float,
+    floors: bool = True,
+    ceilings: bool = True,
+) -> np.ndarray:
+    """Faces that are floor or ceiling surfaces: within 30 degrees of horizontal and within
+    ``tolerance_m`` of a story's floor or ceiling height (the paper's
+    ``RemoveCeilingsAndFloors``)."""
+    horizontal = np.abs(normal_y) >= np.cos(np.radians(30.0))
+    near = np.zeros(len(heights), dtype=bool)
+    for s in stories:
+        if floors:
+            near |= np.abs(heights - s.floor) < tolerance_m
+        if ceilings and s.ceiling_found:
+            near |= np.abs(heights - s.ceiling) < tolerance_m
+    return horizontal & near
+
+
+def without_ceiling(heights: FloatArray, normal_y: FloatArray, story: Story, tolerance_m: float) -> np.ndarray:
+    """Faces of a story that stay when its ceiling is removed, so that a view from above shows
+    the rooms: everything but the ceiling surface and what lies above it."""
+    ceiling = slab_faces(heights, normal_y, (story,), tolerance_m, floors=False)
+    return ~ceiling & (heights < story.ceiling + tolerance_m)
