@@ -22,15 +22,37 @@ class PlanParams:
         Height above the floor at which the flat-wall model is cut for the drafting plan (the
         paper's "single intermediate altitude"; 1.2 m is the usual architectural cut plane,
         through windows and doors).
+    corner_extension_m
+        Wall ends are extended by at most this much to meet the walls they run into (scans
+        round corners off, and miss pieces of wall near them).
+    floor_margin_m
+        The floor outline closes rooms where a wall is missing, grown by this much so that it
+        stays outside walls that were found.
+    floor_cell_m
+        Grid cell of the floor raster (where the floor was scanned).
+    min_room_area_m2, min_room_width_m
+        Smaller or narrower faces of the wall arrangement are not rooms (wall interiors,
+        slivers between wall lines and the floor outline).
+    min_floor_fraction
+        A room must have floor scanned under at least this fraction of it.
     """
 
     slices: int = 100
     drafting_height_m: float = 1.2
+    corner_extension_m: float = 0.6
+    floor_margin_m: float = 0.15
+    floor_cell_m: float = 0.05
+    min_room_area_m2: float = 1.0
+    min_room_width_m: float = 0.5
+    min_floor_fraction: float = 0.3
 
     def __post_init__(self) -> None:
         if not isinstance(self.slices, int) or isinstance(self.slices, bool) or not 1 <= self.slices <= 10000:
             raise ParameterError(f"slices must be an integer from 1 to 10000, got {self.slices!r}", "pass --slices N")
-        check_positive("drafting_height_m", self.drafting_height_m)
+        for name in ("drafting_height_m", "floor_cell_m", "min_room_width_m"):
+            check_positive(name, getattr(self, name))
+        for name in ("corner_extension_m", "floor_margin_m", "min_room_area_m2", "min_floor_fraction"):
+            check_positive(name, getattr(self, name), allow_zero=True)
 
     def to_dict(self) -> dict:
         return asdict(self)

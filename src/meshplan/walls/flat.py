@@ -34,7 +34,8 @@ class FlatWalls:
     ----------
     face_segment
         ``(F,)`` DBSCAN segment of every face of the mesh, -1 for faces in none (for the
-        segment drawings); ``segment_kept`` says which segments became walls.
+        segment drawings); ``segment_kept`` says which segments became walls and
+        ``segment_wall`` which wall each became (-1 for dropped segments).
     """
 
     story: IntArray
@@ -51,6 +52,7 @@ class FlatWalls:
     face_segment: IntArray
     segment_story: IntArray
     segment_kept: np.ndarray
+    segment_wall: IntArray
 
     def __len__(self) -> int:
         return int(len(self.story))
@@ -72,23 +74,54 @@ class FlatWalls:
     def length(self) -> FloatArray:
         return self.u_max - self.u_min
 
-    def select(self, mask: np.ndarray) -> FlatWalls:
-        """The walls where ``mask`` is true (per-face data unchanged)."""
-        fields = ("story", "direction", "normal", "offset", "u_min", "u_max", "bottom", "top", "support", "area")
-        kw = {f: getattr(self, f)[mask] for f in fields}
-        return FlatWalls(
-            **kw,
-            directions=self.directions,
-            face_segment=self.face_segment,
-            segment_story=self.segment_story,
-            segment_kept=self.segment_kept,
-        )
+    def face_walls(self) -> IntArray:
+        """``(F,)`` wall of every face of the mesh, -1 for faces in no wall."""
+        seg = self.face_segment
+        out = np.full(len(seg), -1, dtype=np.int64)
+        ok = seg >= 0
+        out[ok] = self.segment_wall[seg[ok]]
+        return out
 
-    def mesh(self, story: int | None = None) -> Mesh:
-        """The mesh replacement: two triangles per rectangle, normals into the rooms."""
-        sel = np.ones(len(self), bool) if story is None else self.story == story
-        s, e = self.start[sel], self.end[sel]
-        b, t = self.bottom[sel], self.top[sel]
+    def mesh(self, story: int | None = None, holes: dict[int, list[tuple[float, float, float, float]]] | None = None) -> Mesh:
+        """The mesh replacement: two triangles per rectangle, normals into the rooms.
+
+        Parameters
+        ----------
+        story
+            Only the walls of this story.
+        holes
+            Openings to cut out: wall index -> ``(u_min, u_max, bottom, top)`` rectangles. The
+            wall is cut into vertical strips at the openings' sides and each strip keeps what is
+            not in an opening.
+        """
+        idx = np.flatnonzero(np.ones(len(self), bool) if story is None else self.story == story)
+        pieces = []  # (wall, u0, u1, y0, y1)
+        for i in idx:
+            cuts = sorted((holes or {}).get(int(i), []))
+            if not cuts:
+                pieces.append((i, self.u_min[i], self.u_max[i], self.bottom[i], self.top[i]))
+                continue
+            xs = sorted({self.u_min[i], self.u_max[i], *[min(max(c[k], self.u_min[i]), self.u_max[i]) for c in cuts for k in (0, 1)]})
+            for u0, u1 in zip(xs[:-1], xs[1:]):
+                if u1 - u0 <= 1e-9:
+                    continue
+                mid = 0.5 * (u0 + u1)
+                gaps = sorted((c[2], c[3]) for c in cuts if c[0] < mid < c[1])
+                y = self.bottom[i]
+                for g0, g1 in gaps:
+                    if g0 > y:
+                        pieces.append((i, u0, u1, y, min(g0, self.top[i])))
+                    y = max(y, g1)
+                if y < self.top[i]:
+                    pieces.append((i, u0, u1, y, self.top[i]))
+        if not pieces:
+            return Mesh(np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64))
+        arr = np.array(pieces, dtype=np.float64)
+        w = arr[:, 0].astype(np.int64)
+        tan, nor, off = self.tangent[w], self.normal[w], self.offset[w]
+        s = arr[:, 1, None] * tan + off[:, None] * nor
+        e = arr[:, 2, None] * tan + off[:, None] * nor
+        b, t = arr[:, 3], arr[:, 4]
         n = len(s)
         v = np.empty((n, 4, 3))
         v[:, 0] = np.c_[s[:, 0], b, s[:, 1]]
@@ -175,6 +208,7 @@ def _merge(rows: list[dict], depth_half: float, gap: float) -> list[dict]:
                     o["bottom"], o["top"] = min(o["bottom"], r["bottom"]), max(o["top"], r["top"])
                     o["support"] += r["support"]
                     o["area"] = total
+                    o["segments"] = o["segments"] + r["segments"]
                     changed = True
                     break
             else:
@@ -247,11 +281,15 @@ def find_flat_walls(mesh: Mesh, orientation: Orientation, params: WallParams | N
                     "top": float(y_hi[j]),
                     "support": int(support[j]),
                     "area": float(area[j]),
+                    "segments": [int(j) + len(seg_story) - k],
                 }
                 for j in np.flatnonzero(keep)
             ]
             rows.extend(_merge(found, params.box_depth_m / 2, params.merge_gap_m))
     rows.sort(key=lambda r: (r["story"], r["direction"], r["offset"], r["u_min"]))
+    segment_wall = np.full(len(seg_story), -1, dtype=np.int64)
+    for w, r in enumerate(rows):
+        segment_wall[r["segments"]] = w
     col = lambda key, dtype=np.float64: np.array([r[key] for r in rows], dtype=dtype)  # noqa: E731
     return FlatWalls(
         story=col("story", np.int64),
@@ -268,4 +306,5 @@ def find_flat_walls(mesh: Mesh, orientation: Orientation, params: WallParams | N
         face_segment=face_segment,
         segment_story=np.array(seg_story, dtype=np.int64),
         segment_kept=np.array(seg_kept, dtype=bool),
+        segment_wall=segment_wall,
     )

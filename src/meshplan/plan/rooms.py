@@ -1,0 +1,249 @@
+"""Rooms: the free space of each story divided by the drafting walls (not in the paper, which
+measured rooms by hand in Rhino).
+
+1. *Corners.* Scanned walls stop short of their corners (HoloLens meshes round them off). Each
+   wall end is extended, by at most ``corner_extension_m``, to the nearest line of another wall
+   it meets (an L corner extends both walls to their intersection, a T junction extends the stem
+   to the face it meets).
+2. *Arrangement.* The extended walls, plus the outline of the floor (grown by
+   ``floor_margin_m`` so that it stays outside the walls), are noded and polygonized with
+   shapely: every bounded face is a candidate room. Walls run through door openings (an opening
+   does not split a flat wall), so rooms are closed across doors.
+3. *Rooms.* Parts of a face narrower than a room (the inside of a partition, the strip between
+   the outer walls and the floor outline) are cut off, since a room can leak through them into
+   another face. A part is a room when it is large enough, mostly floored, and the walls along it
+   face into it. A room whose boundary follows the floor outline instead of walls (a wall the
+   scan missed) is kept and marked ``closed_by="floor"``.
+
+The room polygon is the net floor area between the inner wall faces; its points run
+counter-clockwise as seen on the plan (x to the right, z down the page).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import shapely
+from shapely.geometry import LineString, MultiLineString, Polygon
+
+from ..geometry import FloatArray, Mesh
+from ..orient import Orientation, Story, slab_faces
+from ..walls import FlatWalls
+from .params import PlanParams
+
+FOOT_M = 0.3048
+
+
+@dataclass(frozen=True, eq=False)
+class Room:
+    """One room of a story (plan frame, metres)."""
+
+    story: int
+    label: str
+    polygon: Polygon
+    closed_by: str  # "walls" or "floor"
+
+    @property
+    def area(self) -> float:
+        return float(self.polygon.area)
+
+    @property
+    def width(self) -> float:
+        """Extent along x."""
+        b = self.polygon.bounds
+        return float(b[2] - b[0])
+
+    @property
+    def depth(self) -> float:
+        """Extent along z."""
+        b = self.polygon.bounds
+        return float(b[3] - b[1])
+
+    def to_dict(self, ndigits: int = 4, imperial: bool = False) -> dict:
+        coords = np.asarray(self.polygon.exterior.coords)[:-1]
+        d = {
+            "story": self.story,
+            "label": self.label,
+            "polygon": (np.round(coords, ndigits) + 0.0).tolist(),
+            "area": round(self.area, ndigits),
+            "width": round(self.width, ndigits),
+            "depth": round(self.depth, ndigits),
+            "closed_by": self.closed_by,
+        }
+        if imperial:
+            d["area_ft2"] = round(self.area / FOOT_M**2, 2)
+        return d
+
+
+@dataclass(frozen=True, eq=False)
+class FloorRaster:
+    """Where a story's floor was scanned, on a square grid (row = z, column = x)."""
+
+    x0: float
+    z0: float
+    cell: float
+    grid: np.ndarray
+
+    def lookup(self, x: FloatArray, z: FloatArray) -> np.ndarray:
+        c = np.floor((np.asarray(x) - self.x0) / self.cell).astype(np.int64)
+        r = np.floor((np.asarray(z) - self.z0) / self.cell).astype(np.int64)
+        ok = (r >= 0) & (r < self.grid.shape[0]) & (c >= 0) & (c < self.grid.shape[1])
+        out = np.zeros(np.shape(c), dtype=bool)
+        out[ok] = self.grid[r[ok], c[ok]]
+        return out
+
+    def outline(self, margin: float):
+        """The floor's outer outline (holes filled) grown by ``margin``, or ``None``."""
+        from scipy.ndimage import binary_fill_holes
+
+        g = binary_fill_holes(self.grid)
+        boxes = []
+        for r in np.flatnonzero(g.any(axis=1)):
+            d = np.diff(np.r_[False, g[r], False].astype(np.int8))
+            for a, b in zip(np.flatnonzero(d == 1), np.flatnonzero(d == -1)):
+                boxes.append(shapely.box(self.x0 + a * self.cell, self.z0 + r * self.cell, self.x0 + b * self.cell, self.z0 + (r + 1) * self.cell))
+        if not boxes:
+            return None
+        return shapely.union_all(boxes).buffer(margin, join_style="mitre").simplify(self.cell)
+
+
+def sample_triangles(triangles: FloatArray, spacing: float) -> FloatArray:
+    """Points covering every triangle at most ``spacing`` apart (a barycentric grid per
+    triangle; triangles are grouped by the subdivision they need, so the work is vectorized)."""
+    tri = np.asarray(triangles, dtype=np.float64)
+    if not len(tri):
+        return np.zeros((0, 3))
+    edge = np.max(np.linalg.norm(tri - np.roll(tri, 1, axis=1), axis=2), axis=1)
+    levels = np.clip(np.ceil(edge / spacing).astype(np.int64), 1, 64)
+    out = []
+    for k in np.unique(levels):
+        t = tri[levels == k]
+        i, j = np.meshgrid(np.arange(k + 1), np.arange(k + 1), indexing="ij")
+        keep = i + j <= k
+        a, b = i[keep] / k, j[keep] / k
+        w = np.stack([1 - a - b, a, b], axis=1)
+        out.append(np.einsum("mk,tkd->tmd", w, t).reshape(-1, 3))
+    return np.concatenate(out)
+
+
+def floor_raster(mesh: Mesh, orientation: Orientation, story: Story, tolerance_m: float, cell: float) -> FloorRaster:
+    """The story's floor surface rasterized at ``cell``."""
+    floor = slab_faces(mesh.face_centroids[:, 1], mesh.face_normals[:, 1], (story,), tolerance_m, ceilings=False)
+    floor &= orientation.face_story == story.index
+    pts = sample_triangles(mesh.triangles[floor], cell * 0.7)
+    if not len(pts):
+        return FloorRaster(0.0, 0.0, cell, np.zeros((1, 1), dtype=bool))
+    x0, z0 = pts[:, 0].min() - cell, pts[:, 2].min() - cell
+    c = np.floor((pts[:, 0] - x0) / cell).astype(np.int64)
+    r = np.floor((pts[:, 2] - z0) / cell).astype(np.int64)
+    grid = np.zeros((r.max() + 2, c.max() + 2), dtype=bool)
+    grid[r, c] = True
+    return FloorRaster(float(x0), float(z0), cell, grid)
+
+
+def extend_walls(walls: FlatWalls, index: np.ndarray, reach_m: float) -> tuple[FloatArray, FloatArray]:
+    """``u_min`` and ``u_max`` of the walls in ``index``, each end extended to the nearest wall
+    line it meets within ``reach_m`` (and 1 mm past it, so that the lines cross and are noded
+    despite rounding; polygonize drops the 1 mm dangles)."""
+    u_lo = walls.u_min[index].copy()
+    u_hi = walls.u_max[index].copy()
+    n = len(index)
+    if n < 2:
+        return u_lo, u_hi
+    tan, nor, off = walls.tangent[index], walls.normal[index], walls.offset[index]
+    lo_b, hi_b = walls.u_min[index] - reach_m, walls.u_max[index] + reach_m
+    for sign, ends in ((-1.0, walls.u_min[index]), (1.0, walls.u_max[index])):
+        p = ends[:, None] * tan + off[:, None] * nor  # (n, 2) wall ends
+        d = sign * tan  # outward directions
+        denom = d @ nor.T  # (n, n): d_a . n_b
+        with np.errstate(divide="ignore", invalid="ignore"):
+            s = (off[None, :] - p @ nor.T) / denom  # distance along d_a to line b
+        x = p[:, None, :] + s[..., None] * d[:, None, :]
+        ub = np.einsum("abk,bk->ab", x, tan)
+        ok = (np.abs(denom) >= np.sin(np.radians(20.0))) & (s >= -1e-9) & (s <= reach_m) & (ub >= lo_b[None, :]) & (ub <= hi_b[None, :])
+        np.fill_diagonal(ok, False)
+        best = np.where(ok, s, np.inf).min(axis=1)
+        hit = np.isfinite(best)
+        if sign < 0:
+            u_lo[hit] -= best[hit] + 1e-3
+        else:
+            u_hi[hit] += best[hit] + 1e-3
+    return u_lo, u_hi
+
+
+def _wall_probe_points(walls: FlatWalls, index: np.ndarray, side: float, step: float = 0.2, inset: float = 0.05) -> FloatArray:
+    """Points just in front of (``side=+1``) or behind (``-1``) each wall, every ``step``."""
+    pts = []
+    for i in index:
+        n = max(2, int(np.ceil((walls.u_max[i] - walls.u_min[i]) / step)))
+        u = np.linspace(walls.u_min[i] + inset, walls.u_max[i] - inset, n)
+        pts.append(u[:, None] * walls.tangent[i] + (walls.offset[i] + side * inset) * walls.normal[i])
+    return np.concatenate(pts) if pts else np.zeros((0, 2))
+
+
+def find_rooms(mesh: Mesh, orientation: Orientation, walls: FlatWalls, params: PlanParams | None = None, slab_tolerance_m: float = 0.1) -> tuple[Room, ...]:
+    """Rooms of every story, labelled ``Room 1``, ``Room 2``, ... story by story, then from the
+    top of the plan down and from left to right."""
+    params = params or PlanParams()
+    found: list[tuple[int, Polygon, str]] = []
+    for story in orientation.stories:
+        found.extend((story.index, poly, how) for poly, how in story_rooms(mesh, orientation, walls, story, params, slab_tolerance_m))
+    found.sort(key=lambda r: (r[0], round(r[1].centroid.y, 1), round(r[1].centroid.x, 1)))
+    return tuple(Room(s, f"Room {i + 1}", poly, how) for i, (s, poly, how) in enumerate(found))
+
+
+def story_rooms(mesh: Mesh, orientation: Orientation, walls: FlatWalls, story: Story, params: PlanParams, slab_tolerance_m: float) -> list[tuple[Polygon, str]]:
+    """``(polygon, closed_by)`` of every room of one story."""
+    index = np.flatnonzero(walls.story == story.index)
+    raster = floor_raster(mesh, orientation, story, slab_tolerance_m, params.floor_cell_m)
+    u_lo, u_hi = extend_walls(walls, index, params.corner_extension_m)
+    lines = [
+        LineString([u_lo[k] * walls.tangent[i] + walls.offset[i] * walls.normal[i], u_hi[k] * walls.tangent[i] + walls.offset[i] * walls.normal[i]])
+        for k, i in enumerate(index)
+    ]
+    wall_lines = MultiLineString(lines) if lines else None
+    outline = raster.outline(params.floor_margin_m)
+    boundary = list(lines)
+    if outline is not None:
+        boundary.extend(p.exterior for p in shapely.get_parts(outline))
+    if not boundary:
+        return []
+    faces = shapely.get_parts(shapely.polygonize(shapely.get_parts(shapely.node(shapely.union_all(boundary)))))
+    front = _wall_probe_points(walls, index, +1.0)
+    behind = _wall_probe_points(walls, index, -1.0)
+    r = params.min_room_width_m / 2
+    out = []
+    for face in faces:
+        if face.area < params.min_room_area_m2:
+            continue
+        opened = face.buffer(-r, join_style="mitre").buffer(r, join_style="mitre", mitre_limit=2.0).intersection(face)
+        for part in shapely.get_parts(opened):
+            if isinstance(part, Polygon) and part.area >= params.min_room_area_m2:
+                room = _classify(part, raster, wall_lines, front, behind, params)
+                if room is not None:
+                    out.append(room)
+    return out
+
+
+def _classify(face: Polygon, raster: FloorRaster, wall_lines, front: FloatArray, behind: FloatArray, params: PlanParams):
+    """``(polygon, closed_by)`` when the face is a room, else ``None``."""
+    xmin, zmin, xmax, zmax = face.bounds
+    gx, gz = np.meshgrid(np.arange(xmin, xmax, 0.1) + 0.05, np.arange(zmin, zmax, 0.1) + 0.05)
+    gx, gz = gx.ravel(), gz.ravel()
+    inside = shapely.contains_xy(face, gx, gz)
+    if inside.sum() == 0 or raster.lookup(gx[inside], gz[inside]).mean() < params.min_floor_fraction:
+        return None
+    n_front = int(shapely.contains_xy(face, front[:, 0], front[:, 1]).sum()) if len(front) else 0
+    n_behind = int(shapely.contains_xy(face, behind[:, 0], behind[:, 1]).sum()) if len(behind) else 0
+    if n_behind > n_front:
+        return None  # behind walls: outside the building, or inside a thick wall
+    closed_by = "floor"
+    if wall_lines is not None:
+        ring = face.exterior
+        d = np.linspace(0, ring.length, max(8, int(ring.length / 0.1)), endpoint=False)
+        dist = shapely.distance(shapely.line_interpolate_point(ring, d), wall_lines)
+        if np.mean(dist > 0.02) <= 0.05:
+            closed_by = "walls"
+    poly = shapely.orient_polygons(Polygon(shapely.simplify(face, 0.005).exterior), exterior_cw=True)
+    return poly, closed_by
