@@ -159,7 +159,7 @@ def extend_walls(walls: FlatWalls, index: np.ndarray, reach_m: float) -> tuple[F
         denom = d @ nor.T  # (n, n): d_a . n_b
         with np.errstate(divide="ignore", invalid="ignore"):
             s = (off[None, :] - p @ nor.T) / denom  # distance along d_a to line b
-        x = p[:, None, :] + s[..., None] * d[:, None, :]
+            x = p[:, None, :] + s[..., None] * d[:, None, :]
         ub = np.einsum("abk,bk->ab", x, tan)
         ok = (np.abs(denom) >= np.sin(np.radians(20.0))) & (s >= -1e-9) & (s <= reach_m) & (ub >= lo_b[None, :]) & (ub <= hi_b[None, :])
         np.fill_diagonal(ok, False)
