@@ -21,13 +21,13 @@ from .geometry import Annotations, Mesh
 from .io import LoadStats, load_annotations, load_mesh
 from .options import RunOptions
 from .orient import Orientation, Story, assign_faces, orient
-from .plan import DraftingPlan, PenAndInkPlan, drafting, pen_and_ink
+from .plan import DraftingPlan, Openings, PenAndInkPlan, Room, drafting, find_openings, find_rooms, pen_and_ink
 from .walls import FlatWalls, find_flat_walls
 
 log = logging.getLogger("meshplan")
 
 #: Stages reported to progress callbacks, in order.
-STAGES = ("load", "orient", "walls", "slice_draw", "write")
+STAGES = ("load", "orient", "walls", "rooms", "slice_draw", "write")
 
 #: The paper's Table 1 timings (seconds) for its residential building B2 (285,840 faces).
 PAPER_TIMINGS_S = {"orient": 24.08, "walls": 81.5, "slice_draw": 0.9}
@@ -64,6 +64,8 @@ class Result:
         The annotations in the plan frame.
     walls
         The flat walls of every story.
+    rooms, openings
+        Rooms of every story; doors and windows in the walls.
     stories
         The plans of each story.
     timings
@@ -82,6 +84,8 @@ class Result:
     mesh: Mesh
     annotations: Annotations
     walls: FlatWalls
+    rooms: tuple[Room, ...]
+    openings: Openings
     stories: tuple[StoryPlans, ...]
     timings: dict[str, float] = field(default_factory=dict)
     output_dir: Path | None = None
@@ -102,6 +106,9 @@ class Result:
             "faces": self.input.faces,
             "stories": [s.story.to_dict(3) for s in self.stories],
             "walls": len(self.walls),
+            "rooms": [{"label": r.label, "story": r.story, "area": round(r.area, 2)} for r in self.rooms],
+            "doors": sum(k == "door" for k in self.openings.kind),
+            "windows": sum(k == "window" for k in self.openings.kind),
             "annotations": len(self.annotations),
             "warnings": list(self.warnings),
             "timings": {k: round(v, 4) for k, v in self.timings.items()},
@@ -142,6 +149,9 @@ def compute(
         plan_annotations = annotations.transformed(orientation.transform)
     with timer.stage("walls"):
         walls = find_flat_walls(plan_mesh, orientation, options.walls)
+    with timer.stage("rooms"):
+        openings = find_openings(plan_mesh, orientation, walls, options.plan)
+        rooms = find_rooms(plan_mesh, orientation, walls, options.plan, options.orient.slab_tolerance_m)
     with timer.stage("slice_draw"):
         ann_story = assign_faces(plan_annotations.positions[:, 1], orientation.stories) if len(plan_annotations) else np.zeros(0, np.int64)
         plans = []
@@ -157,7 +167,7 @@ def compute(
                 StoryPlans(
                     story=story,
                     pen_and_ink=pen_and_ink(plan_mesh, orientation, story, options.plan, options.orient.slab_tolerance_m),
-                    drafting=drafting(walls, story, options.plan),
+                    drafting=drafting(walls, story, options.plan, openings.holes()),
                     annotations=story_ann,
                 )
             )
@@ -172,6 +182,8 @@ def compute(
         mesh=plan_mesh,
         annotations=plan_annotations,
         walls=walls,
+        rooms=rooms,
+        openings=openings,
         stories=tuple(plans),
         timings=timer.timings,
         warnings=tuple(warnings),

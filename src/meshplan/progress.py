@@ -61,7 +61,7 @@ def print_summary(result: Result) -> None:
     st = result.input
     console.print(f"[bold]{st.path}[/]: {st.faces:,} faces" + (f" ({st.dropped_faces:,} dropped)" if st.dropped_faces else ""))
     table = Table(title="Stories", show_edge=False)
-    for col in ("story", "floor (m)", "ceiling (m)", "height (m)", "walls", "annotations"):
+    for col in ("story", "floor (m)", "ceiling (m)", "height (m)", "walls", "rooms", "doors", "windows", "annotations"):
         table.add_column(col, justify="right")
     for sp in result.stories:
         s = sp.story
@@ -71,6 +71,9 @@ def print_summary(result: Result) -> None:
             f"{s.ceiling:.3f}" + ("" if s.ceiling_found else " (assumed)"),
             f"{s.height:.3f}",
             str(int((result.walls.story == s.index).sum())),
+            str(sum(r.story == s.index for r in result.rooms)),
+            str(sum(k == "door" and st == s.index for k, st in zip(result.openings.kind, result.openings.story))),
+            str(sum(k == "window" and st == s.index for k, st in zip(result.openings.kind, result.openings.story))),
             str(len(sp.annotations)),
         )
     console.print(table)

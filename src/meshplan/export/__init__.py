@@ -20,10 +20,12 @@ from ..render import (
     pen_and_ink_figure,
     segments_figure,
 )
+from ..plan.symbols import plan_symbols
 from ..slicing import slice_mesh
 from .dxf import drafting_dxf
 from .glb import WALL_RGBA, glb_bytes
 from .planjson import dumps, plan_document, plan_schema
+from .report import report_html
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..pipeline import Result, _Timer
@@ -54,7 +56,8 @@ def render_files(result: Result, timer: _Timer | None = None) -> dict[str, bytes
             faces = np.flatnonzero(o.face_story == i)
             sheet = make_sheet(mesh.face_centroids[faces][:, [0, 2]], params)
             pen = pen_and_ink_figure(sp.pen_and_ink, sp.annotations, sheet, params, n)
-            draft = drafting_figure(sp.drafting, sp.annotations, sheet, params, n)
+            symbols = plan_symbols(i, result.walls, result.openings, result.rooms, params.imperial, default_thickness_m=result.options.walls.default_wall_thickness_m)
+            draft = drafting_figure(sp.drafting, sp.annotations, sheet, params, n, symbols)
             for fmt in ("png", "svg", "pdf"):
                 files[f"pen-and-ink-{i}.{fmt}"] = figure_bytes(pen, fmt)
                 files[f"drafting-{i}.{fmt}"] = figure_bytes(draft, fmt)
@@ -65,12 +68,20 @@ def render_files(result: Result, timer: _Timer | None = None) -> dict[str, bytes
             i = sp.story.index
             keep = (o.face_story == i) & without_ceiling(heights, mesh.face_normals[:, 1], sp.story, result.options.orient.slab_tolerance_m)
             files[f"story-{i}.glb"] = glb_bytes(mesh.submesh(np.flatnonzero(keep)), sp.annotations, f"story {i}")
-            files[f"flat-walls-{i}.glb"] = glb_bytes(result.walls.mesh(i), sp.annotations, f"flat walls {i}", WALL_RGBA)
+            files[f"flat-walls-{i}.glb"] = glb_bytes(result.walls.mesh(i, result.openings.holes()), sp.annotations, f"flat walls {i}", WALL_RGBA)
             faces = np.flatnonzero(o.face_story == i)
             reference = slice_mesh(mesh.triangles[faces], np.array([sp.drafting.height]))
+            symbols = plan_symbols(i, result.walls, result.openings, result.rooms, params.imperial, default_thickness_m=result.options.walls.default_wall_thickness_m)
             files[f"drafting-{i}.dxf"] = drafting_dxf(
-                sp.drafting.slices.segments, reference.segments, sp.annotations, f"meshplan drafting plan, story {i}"
+                sp.drafting.slices.segments,
+                reference.segments,
+                sp.annotations,
+                f"meshplan drafting plan, story {i}",
+                symbols,
+                [r for r in result.rooms if r.story == i],
             )
+        # last: the report inlines the other files
+        files["report.html"] = report_html(result, files).encode("utf-8")
     return files
 
 

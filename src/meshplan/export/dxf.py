@@ -17,6 +17,10 @@ LAYERS = {
     "SLICES": 8,  # grey
     "ANNOTATIONS": 1,  # red
     "TEXT": 7,
+    "ROOMS": 3,  # green
+    "DIMENSIONS": 8,
+    "DOORS": 30,  # orange
+    "WINDOWS": 5,  # blue
 }
 
 
@@ -24,10 +28,20 @@ def _p(xz) -> tuple[float, float]:
     return (float(xz[0]), float(-xz[1]))
 
 
-def drafting_dxf(wall_segments: np.ndarray, slice_segments: np.ndarray, annotations: Annotations, title: str = "") -> bytes:
+def drafting_dxf(
+    wall_segments: np.ndarray,
+    slice_segments: np.ndarray,
+    annotations: Annotations,
+    title: str = "",
+    symbols=None,
+    rooms=(),
+) -> bytes:
     """The drafting plan as DXF: ``wall_segments`` (the flat walls cut once) on WALLS,
     ``slice_segments`` (the scan cut at the same height, for reference) on SLICES, annotations
-    as circles and probe lines on ANNOTATIONS and their labels on TEXT.
+    as circles and probe lines on ANNOTATIONS and their labels on TEXT; with ``symbols``
+    (:class:`meshplan.plan.symbols.PlanSymbols`) and ``rooms``, room outlines and labels on
+    ROOMS, DIMENSION entities on DIMENSIONS, door leaves and swings on DOORS and window sashes
+    on WINDOWS.
 
     Segments are ``(S, 2, 2)`` arrays of plan points [x, z] in metres.
     """
@@ -54,6 +68,26 @@ def drafting_dxf(wall_segments: np.ndarray, slice_segments: np.ndarray, annotati
             n = np.hypot(d[0], d[2])
             msp.add_line(c, (c[0] + 0.4 * d[0] / n, c[1] - 0.4 * d[2] / n), dxfattribs={"layer": "ANNOTATIONS"})
         msp.add_text(f"{label} ({kind})", height=0.12, dxfattribs={"layer": "TEXT"}).set_placement((c[0] + 0.1, c[1] + 0.1))
+    for room in rooms:
+        pts = [_p(c) for c in list(room.polygon.exterior.coords)[:-1]]
+        msp.add_lwpolyline(pts, close=True, dxfattribs={"layer": "ROOMS"})
+    if symbols is not None:
+        for seg in symbols.door_leaves:
+            msp.add_line(_p(seg[0]), _p(seg[1]), dxfattribs={"layer": "DOORS"})
+        for a in symbols.door_arcs:
+            # mirrored drawing: plan angle t becomes -t, and the arc runs the other way
+            msp.add_arc(_p(a.center), a.radius, -a.end_deg, -a.start_deg, dxfattribs={"layer": "DOORS"})
+        for seg in symbols.jambs:
+            msp.add_line(_p(seg[0]), _p(seg[1]), dxfattribs={"layer": "WALLS"})
+        for seg in symbols.windows:
+            msp.add_line(_p(seg[0]), _p(seg[1]), dxfattribs={"layer": "WINDOWS"})
+        for d in symbols.dimensions:
+            p1, p2 = np.asarray(_p(d.p1)), np.asarray(_p(d.p2))
+            # "left of p1 -> p2" in the plan is right of it in the mirrored drawing
+            dim = msp.add_aligned_dim(p1=tuple(p1), p2=tuple(p2), distance=-d.offset, dimstyle="EZDXF", override={"dimtxt": 0.1, "dimasz": 0.06, "dimlfac": 1.0, "dimdec": 2, "dimexo": 0.05, "dimexe": 0.05}, dxfattribs={"layer": "DIMENSIONS"})
+            dim.render()
+        for lab in symbols.room_labels:
+            msp.add_mtext(lab.text.replace("\n", "\\P"), dxfattribs={"layer": "ROOMS", "char_height": 0.18}).set_location(_p(lab.position), attachment_point=5)
     if title:
         pts = np.concatenate([np.asarray(wall_segments).reshape(-1, 2), np.asarray(slice_segments).reshape(-1, 2), np.zeros((1, 2))])
         msp.add_text(title, height=0.25, dxfattribs={"layer": "TEXT"}).set_placement((float(pts[:, 0].min()), float(-pts[:, 1].min()) + 0.5))

@@ -56,6 +56,8 @@ def plan_document(result: Result) -> dict[str, Any]:
             for d in o.alignment.directions
         ],
         "walls": result.walls.to_list(_NC),
+        "rooms": [r.to_dict(_NC, imperial=result.options.render.imperial) for r in result.rooms],
+        "openings": result.openings.to_list(result.walls, _NC),
         "annotations": [
             dict(item, story=int(result.annotation_story[i]))
             for i, item in enumerate(result.annotations.to_list(_NC))

@@ -1,8 +1,20 @@
-"""Floor plans of each story: pen-and-ink (many slices of the mesh) and drafting (one slice of
-the flat-wall model)."""
+"""Floor plans of each story: pen-and-ink (many slices of the mesh), drafting (one slice of the
+flat-wall model), rooms, doors and windows."""
 
 from .drafting import DraftingPlan, drafting
+from .openings import Openings, find_openings
 from .params import PlanParams
 from .peninink import PenAndInkPlan, pen_and_ink
+from .rooms import Room, find_rooms
 
-__all__ = ["DraftingPlan", "PenAndInkPlan", "PlanParams", "drafting", "pen_and_ink"]
+__all__ = [
+    "DraftingPlan",
+    "Openings",
+    "PenAndInkPlan",
+    "PlanParams",
+    "Room",
+    "drafting",
+    "find_openings",
+    "find_rooms",
+    "pen_and_ink",
+]

@@ -21,11 +21,11 @@ class DraftingPlan:
     slices: Slices
 
 
-def drafting(walls: FlatWalls, story: Story, params: PlanParams | None = None) -> DraftingPlan:
-    """Cut the story's flat-wall rectangles at ``drafting_height_m`` above its floor (kept below
-    the ceiling)."""
+def drafting(walls: FlatWalls, story: Story, params: PlanParams | None = None, holes: dict | None = None) -> DraftingPlan:
+    """Cut the story's flat-wall rectangles, with the openings in ``holes`` cut out of them, at
+    ``drafting_height_m`` above its floor (kept below the ceiling)."""
     params = params or PlanParams()
     above = params.drafting_height_m if params.drafting_height_m < story.height else 0.5 * story.height
     height = story.floor + above
-    model = walls.mesh(story.index)
+    model = walls.mesh(story.index, holes)
     return DraftingPlan(story, float(height), slice_mesh(model.triangles, np.array([height])))

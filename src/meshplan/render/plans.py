@@ -6,11 +6,13 @@ import numpy as np
 
 from ..geometry import Annotations, Mesh
 from ..plan import DraftingPlan, PenAndInkPlan
+from ..plan.symbols import PlanSymbols
 from ..walls import FlatWalls
 from .params import RenderParams
 from .sheet import Sheet, draw_annotations, draw_scale_bar, ink_rgba, new_figure, place_raster, rasterize_segments
 
 WALL_COLOR = "#111111"
+DIM_COLOR = "#6a6a6a"
 #: Saturated colours for wall segments (no greys: grey marks the segments that were dropped).
 SEGMENT_COLORS = (
     "#e6194b", "#3cb44b", "#4363d8", "#f58231", "#911eb4", "#42d4f4", "#f032e6", "#9a6324",
@@ -37,17 +39,61 @@ def pen_and_ink_figure(plan: PenAndInkPlan, annotations: Annotations, sheet: She
     return fig
 
 
-def drafting_figure(plan: DraftingPlan, annotations: Annotations, sheet: Sheet, params: RenderParams, n_stories: int = 1):
-    """The flat-wall model cut once, drawn as clean wall lines."""
+def drafting_figure(
+    plan: DraftingPlan,
+    annotations: Annotations,
+    sheet: Sheet,
+    params: RenderParams,
+    n_stories: int = 1,
+    symbols: PlanSymbols | None = None,
+):
+    """The flat-wall model cut once, drawn as clean wall lines, with rooms, doors, windows and
+    dimensions."""
     from matplotlib.collections import LineCollection
+    from matplotlib.patches import Arc as ArcPatch
 
     s = plan.story
     cut = plan.height - s.floor
     fig, ax = new_figure(sheet, _story_title(f"Drafting (cut at {cut:.2f} m)", s.index, n_stories, s.floor, s.ceiling, params.imperial), params)
     ax.add_collection(LineCollection(plan.slices.segments, colors=WALL_COLOR, linewidths=1.6, capstyle="projecting", zorder=3))
+    if symbols is not None:
+        thin = dict(colors=WALL_COLOR, linewidths=0.5, zorder=3)
+        ax.add_collection(LineCollection(symbols.jambs, **thin))
+        ax.add_collection(LineCollection(symbols.windows, colors="#1f4e99", linewidths=0.6, zorder=3))
+        ax.add_collection(LineCollection(symbols.door_leaves, colors=WALL_COLOR, linewidths=0.9, zorder=3))
+        for a in symbols.door_arcs:
+            ax.add_patch(ArcPatch(a.center, 2 * a.radius, 2 * a.radius, theta1=a.start_deg, theta2=a.end_deg, color=WALL_COLOR, lw=0.4, ls="--", zorder=3))
+        _draw_dimensions(ax, symbols)
+        for lab in symbols.room_labels:
+            ax.text(*lab.position, lab.text, ha="center", va="center", fontsize=6.5, color="#222222", zorder=4, linespacing=1.3)
     draw_annotations(ax, annotations.labels, annotations.kinds, annotations.positions, annotations.directions)
     draw_scale_bar(fig, sheet, params)
     return fig
+
+
+def _draw_dimensions(ax, symbols: PlanSymbols) -> None:
+    from matplotlib.collections import LineCollection
+
+    lines, ticks = [], []
+    for d in symbols.dimensions:
+        p1, p2 = np.asarray(d.p1), np.asarray(d.p2)
+        u = (p2 - p1) / np.linalg.norm(p2 - p1)
+        left = np.array([-u[1], u[0]])
+        a, b = p1 + left * d.offset, p2 + left * d.offset
+        lines.append([a, b])
+        lines.append([p1 + left * 0.05, a + left * 0.05])  # extension lines
+        lines.append([p2 + left * 0.05, b + left * 0.05])
+        diag = (u + left) * 0.06
+        ticks.extend([[a - diag, a + diag], [b - diag, b + diag]])
+        angle = np.degrees(np.arctan2(u[1], u[0]))
+        # text upright on a page with z down: matplotlib measures rotation on screen
+        rot = -angle
+        if rot > 90 or rot < -90:
+            rot += 180
+        mid = 0.5 * (a + b) + left * 0.07
+        ax.text(mid[0], mid[1], d.text, fontsize=4.5, color=DIM_COLOR, ha="center", va="center", rotation=((rot + 180) % 360) - 180, rotation_mode="anchor", zorder=4)
+    ax.add_collection(LineCollection(lines, colors=DIM_COLOR, linewidths=0.3, zorder=2))
+    ax.add_collection(LineCollection(ticks, colors=DIM_COLOR, linewidths=0.5, zorder=2))
 
 
 def segments_figure(mesh: Mesh, walls: FlatWalls, story: int, sheet: Sheet, params: RenderParams, n_stories: int = 1):
