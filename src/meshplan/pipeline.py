@@ -22,7 +22,7 @@ from .io import LoadStats, load_annotations, load_mesh
 from .options import RunOptions
 from .orient import Orientation, Story, assign_faces, orient
 from .plan import DraftingPlan, Openings, PenAndInkPlan, Room, drafting, find_openings, find_rooms, pen_and_ink
-from .walls import FlatWalls, find_flat_walls
+from .walls import FlatWalls, PhysicalWall, find_flat_walls, physical_walls
 
 log = logging.getLogger("meshplan")
 
@@ -66,6 +66,8 @@ class Result:
         The flat walls of every story.
     rooms, openings
         Rooms of every story; doors and windows in the walls.
+    physical_walls
+        The wall faces paired into walls with a thickness.
     stories
         The plans of each story.
     timings
@@ -86,6 +88,7 @@ class Result:
     walls: FlatWalls
     rooms: tuple[Room, ...]
     openings: Openings
+    physical_walls: tuple[PhysicalWall, ...]
     stories: tuple[StoryPlans, ...]
     timings: dict[str, float] = field(default_factory=dict)
     output_dir: Path | None = None
@@ -152,6 +155,7 @@ def compute(
     with timer.stage("rooms"):
         openings = find_openings(plan_mesh, orientation, walls, options.plan)
         rooms = find_rooms(plan_mesh, orientation, walls, options.plan, options.orient.slab_tolerance_m)
+        physical = physical_walls(walls, options.walls.max_wall_thickness_m, options.walls.default_wall_thickness_m)
     with timer.stage("slice_draw"):
         ann_story = assign_faces(plan_annotations.positions[:, 1], orientation.stories) if len(plan_annotations) else np.zeros(0, np.int64)
         plans = []
@@ -184,6 +188,7 @@ def compute(
         walls=walls,
         rooms=rooms,
         openings=openings,
+        physical_walls=physical,
         stories=tuple(plans),
         timings=timer.timings,
         warnings=tuple(warnings),

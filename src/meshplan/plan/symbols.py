@@ -3,8 +3,8 @@ and dimension lines. Drawings (matplotlib) and CAD files (DXF) draw the same sym
 
 A door between two rooms is found on both faces of its wall; it is drawn once, swinging into the
 room of the first face found, with jamb lines across the wall. A window is drawn as the usual
-triple line across the wall. Wall thickness comes from the opposite face where both sides were
-scanned, else ``default_thickness_m``.
+triple line across the wall. Wall thickness comes from the physical walls (see
+:mod:`meshplan.walls.physical`).
 """
 
 from __future__ import annotations
@@ -17,6 +17,7 @@ from shapely.ops import polylabel
 
 from ..geometry import FloatArray
 from ..walls import FlatWalls
+from ..walls.physical import PhysicalWall, wall_of_face
 from .openings import Openings
 from .rooms import Room
 
@@ -72,38 +73,18 @@ def format_area(m2: float, imperial: bool) -> str:
     return f"{m2 / FOOT_M**2:.1f} ft²" if imperial else f"{m2:.2f} m²"
 
 
-def _partner(walls: FlatWalls, w: int, u0: float, u1: float, max_gap: float) -> tuple[int, float] | None:
-    """The wall facing the other way behind wall ``w`` over [u0, u1], and the distance to it."""
-    n, t = walls.normal[w], walls.tangent[w]
-    best = None
-    for v in np.flatnonzero(walls.story == walls.story[w]):
-        if walls.normal[v] @ n > -0.99:
-            continue
-        # the plane of v is n_v . p = off_v, that is n . p = -off_v: it lies behind w by
-        gap = walls.offset[w] + walls.offset[v]
-        if not (0.02 < gap <= max_gap):
-            continue
-        a = walls.start[v] @ t
-        b = walls.end[v] @ t
-        lo, hi = min(a, b), max(a, b)
-        if min(hi, u1) - max(lo, u0) <= 0.5 * (u1 - u0):
-            continue
-        if best is None or gap < best[1]:
-            best = (int(v), float(gap))
-    return best
-
-
 def plan_symbols(
     story: int,
     walls: FlatWalls,
     openings: Openings,
     rooms: tuple[Room, ...],
+    physical: tuple[PhysicalWall, ...],
     imperial: bool = False,
-    max_thickness_m: float = 0.4,
-    default_thickness_m: float = 0.15,
     dimension_offset_m: float = 0.3,
 ) -> PlanSymbols:
-    """The symbols of one story's drafting plan."""
+    """The symbols of one story's drafting plan; door jambs and window sashes span the
+    thickness of the ``physical`` wall carrying each opening."""
+    carrier = wall_of_face(physical, len(walls))
     leaves, arcs, jambs, windows = [], [], [], []
     drawn: list[tuple[FloatArray, float]] = []  # door centres already drawn
     centers = openings.center(walls) if len(openings) else np.zeros((0, 2))
@@ -111,8 +92,7 @@ def plan_symbols(
         w = int(openings.wall[i])
         n, t = walls.normal[w], walls.tangent[w]
         u0, u1 = float(openings.u_min[i]), float(openings.u_max[i])
-        partner = _partner(walls, w, u0, u1, max_thickness_m)
-        depth = partner[1] if partner else default_thickness_m
+        depth = physical[carrier[w]].thickness
         p0 = u0 * t + walls.offset[w] * n
         p1 = u1 * t + walls.offset[w] * n
         back = -n * depth
