@@ -130,6 +130,7 @@ def run(
     ceiling_reach: Optional[float] = typer.Option(None, "--ceiling-reach", help=_d("ceiling_reach_m", "A wall must come this close to the ceiling (m).")),
     min_room_height: Optional[float] = typer.Option(None, "--min-room-height", help=_d("min_room_height_m", "Smallest floor-to-ceiling gap of a story (m).")),
     default_ceiling_height: Optional[float] = typer.Option(None, "--default-ceiling-height", help=_d("default_ceiling_height_m", "Ceiling height assumed when none is scanned (m).")),
+    ifc: bool = typer.Option(False, "--ifc", help="Also write model.ifc (IFC4; needs the ifc extra)."),
     max_faces: Optional[int] = typer.Option(None, "--max-faces", help="Refuse larger scans [default: what fits in memory]."),
     set_: list[str] = typer.Option([], "--set", help="Any other parameter, NAME=VALUE (see plan.json 'parameters')."),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="Print nothing but errors."),
@@ -162,6 +163,7 @@ def run(
         min_room_height_m=min_room_height,
         default_ceiling_height_m=default_ceiling_height,
         max_faces=max_faces,
+        ifc=ifc or None,
     )
     params = {k: v for k, v in params.items() if v is not None}
     params.update(_parse_set(set_))
@@ -206,6 +208,33 @@ def synth(
     path = write_synthetic(scan, output, fmt, force=force)
     if not quiet:
         typer.echo(f"wrote {path} ({scan.mesh.n_faces:,} faces), {output / 'annotations.json'} and {output / 'truth.json'}")
+
+
+@app.command()
+def evaluate(
+    plan: Path = typer.Argument(..., help="plan.json written by meshplan run."),
+    truth: Path = typer.Argument(..., help="truth.json written by meshplan synth."),
+    as_json: bool = typer.Option(False, "--json", help="Print the report as JSON."),
+    output: Optional[Path] = typer.Option(None, "--output", "-o", help="Also write the JSON report to this file."),
+) -> None:
+    """Compare a result with a synthetic scan's ground truth (the paper's Table 2 and more)."""
+    from .evaluate import evaluate as run_evaluation
+    from .evaluate import format_report
+    from .io import atomic_write_text
+
+    docs = []
+    for path, what in ((plan, "plan"), (truth, "truth")):
+        try:
+            docs.append(json.loads(path.read_text(encoding="utf-8")))
+        except FileNotFoundError:
+            raise MeshplanError(f"{path}: file not found", f"give the {what} JSON file") from None
+        except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+            raise MeshplanError(f"{path}: not a readable JSON file ({exc})", f"give the {what} JSON file") from None
+    report = run_evaluation(*docs)
+    text = json.dumps(report, indent=2)
+    if output is not None:
+        atomic_write_text(output, text + "\n")
+    typer.echo(text if as_json else format_report(report))
 
 
 @app.command()

@@ -43,12 +43,26 @@ class InputParams:
             raise ParameterError(f"max_faces must be a positive integer, got {self.max_faces!r}", "pass --max-faces N")
 
 
+@dataclass(frozen=True)
+class ExportParams:
+    """Optional outputs.
+
+    Attributes
+    ----------
+    ifc
+        Also write ``model.ifc`` (IFC4; needs the ``ifc`` extra, ifcopenshell).
+    """
+
+    ifc: bool = False
+
+
 _GROUPS = {
     "input": InputParams,
     "orient": OrientParams,
     "walls": WallParams,
     "plan": PlanParams,
     "render": RenderParams,
+    "export": ExportParams,
 }
 
 
@@ -61,6 +75,7 @@ class RunOptions:
     walls: WallParams = field(default_factory=WallParams)
     plan: PlanParams = field(default_factory=PlanParams)
     render: RenderParams = field(default_factory=RenderParams)
+    export: ExportParams = field(default_factory=ExportParams)
 
     @classmethod
     def names(cls) -> dict[str, str]:

@@ -48,6 +48,7 @@ def render_files(result: Result, timer: _Timer | None = None) -> dict[str, bytes
     params = result.options.render
     n = len(result.stories)
     heights = mesh.face_centroids[:, 1]
+    symbols = {}
     with stage("slice_draw"):
         files["levels.png"] = figure_bytes(levels_figure(o, params), "png")
         files["normals.png"] = figure_bytes(normals_figure(mesh.face_normals, mesh.face_areas, o), "png")
@@ -56,13 +57,17 @@ def render_files(result: Result, timer: _Timer | None = None) -> dict[str, bytes
             faces = np.flatnonzero(o.face_story == i)
             sheet = make_sheet(mesh.face_centroids[faces][:, [0, 2]], params)
             pen = pen_and_ink_figure(sp.pen_and_ink, sp.annotations, sheet, params, n)
-            symbols = plan_symbols(i, result.walls, result.openings, result.rooms, params.imperial, default_thickness_m=result.options.walls.default_wall_thickness_m)
-            draft = drafting_figure(sp.drafting, sp.annotations, sheet, params, n, symbols)
+            symbols[i] = plan_symbols(i, result.walls, result.openings, result.rooms, result.physical_walls, params.imperial)
+            draft = drafting_figure(sp.drafting, sp.annotations, sheet, params, n, symbols[i])
             for fmt in ("png", "svg", "pdf"):
                 files[f"pen-and-ink-{i}.{fmt}"] = figure_bytes(pen, fmt)
                 files[f"drafting-{i}.{fmt}"] = figure_bytes(draft, fmt)
             files[f"wall-segments-{i}.png"] = figure_bytes(segments_figure(mesh, result.walls, i, sheet, params, n), "png")
     with stage("write"):
+        if result.options.export.ifc:
+            from .ifc import ifc_bytes
+
+            files["model.ifc"] = ifc_bytes(result)
         files["oriented.glb"] = glb_bytes(mesh, result.annotations, "scan")
         for sp in result.stories:
             i = sp.story.index
@@ -71,13 +76,12 @@ def render_files(result: Result, timer: _Timer | None = None) -> dict[str, bytes
             files[f"flat-walls-{i}.glb"] = glb_bytes(result.walls.mesh(i, result.openings.holes()), sp.annotations, f"flat walls {i}", WALL_RGBA)
             faces = np.flatnonzero(o.face_story == i)
             reference = slice_mesh(mesh.triangles[faces], np.array([sp.drafting.height]))
-            symbols = plan_symbols(i, result.walls, result.openings, result.rooms, params.imperial, default_thickness_m=result.options.walls.default_wall_thickness_m)
             files[f"drafting-{i}.dxf"] = drafting_dxf(
                 sp.drafting.slices.segments,
                 reference.segments,
                 sp.annotations,
                 f"meshplan drafting plan, story {i}",
-                symbols,
+                symbols[i],
                 [r for r in result.rooms if r.story == i],
             )
         # last: the report inlines the other files
