@@ -57,3 +57,26 @@ def box_room(width=5.0, depth=4.0, height=2.6, cell=0.1) -> tuple[np.ndarray, np
     quad_grid([0, 0, 0], [0, height, 0], [0, 0, depth], nh, nd)  # wall x=0, normal +x
     quad_grid([width, 0, 0], [0, 0, depth], [0, height, 0], nd, nh)  # wall x=width, normal -x
     return np.concatenate(verts), np.concatenate(faces)
+
+
+@pytest.fixture(scope="session")
+def computed():
+    """``computed(preset, seed, **synth)`` -> (scan, result): synthetic scans run through every
+    computing stage (no files), cached for the session."""
+    from meshplan.io import LoadStats
+    from meshplan.options import RunOptions
+    from meshplan.pipeline import compute
+    from meshplan.synthetic import SynthParams, generate
+
+    cache = {}
+
+    def get(preset: str, seed: int, **kw):
+        key = (preset, seed, tuple(sorted(kw.items())))
+        if key not in cache:
+            scan = generate(SynthParams(preset=preset, seed=seed, **kw))
+            m = scan.mesh
+            stats = LoadStats("synthetic", "obj", "m", 1.0, 1, m.n_vertices, m.n_faces, 0, 0, 0, m.n_vertices, m.n_faces)
+            cache[key] = (scan, compute(m, stats, scan.annotations, RunOptions()))
+        return cache[key]
+
+    return get

@@ -56,7 +56,7 @@ def ifc_bytes(result: Result) -> bytes:
 
     f = project.create_file(version="IFC4")
     proj = root.create_entity(f, ifc_class="IfcProject", name=f"meshplan: {result.input.path}")
-    unit.assign_unit(f)  # metres, square metres
+    unit.assign_unit(f, length={"is_metric": True, "raw": "METERS"}, area={"is_metric": True, "raw": "SQUARE_METERS"}, volume={"is_metric": True, "raw": "CUBIC_METERS"})
     model = context.add_context(f, context_type="Model")
     body = context.add_context(f, context_type="Model", context_identifier="Body", target_view="MODEL_VIEW", parent=model)
     site = root.create_entity(f, ifc_class="IfcSite", name="Site")
@@ -172,3 +172,10 @@ def _make_deterministic(f) -> None:
         if hasattr(ent, "LastModifiedDate"):
             ent.LastModifiedDate = None
     f.header.file_name.time_stamp = "2000-01-01T00:00:00"
+    # ifcopenshell gathers related elements in a set: order them by entity id
+    for rel in f.by_type("IfcRelContainedInSpatialStructure"):
+        rel.RelatedElements = sorted(rel.RelatedElements, key=lambda e: e.id())
+    for rel in f.by_type("IfcRelAggregates"):
+        rel.RelatedObjects = sorted(rel.RelatedObjects, key=lambda e: e.id())
+    for ua in f.by_type("IfcUnitAssignment"):
+        ua.Units = sorted(ua.Units, key=lambda e: e.id())

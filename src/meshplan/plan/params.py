@@ -28,6 +28,9 @@ class PlanParams:
     floor_margin_m
         The floor outline closes rooms where a wall is missing, grown by this much so that it
         stays outside walls that were found.
+    floor_closure_margin_m
+        Where a wall is missing, the room ends this far beyond the edge of its scanned floor
+        (scans round off the corner between floor and wall).
     floor_cell_m
         Grid cell of the floor raster (where the floor was scanned).
     min_room_area_m2, min_room_width_m
@@ -53,6 +56,7 @@ class PlanParams:
     drafting_height_m: float = 1.2
     corner_extension_m: float = 0.6
     floor_margin_m: float = 0.15
+    floor_closure_margin_m: float = 0.05
     floor_cell_m: float = 0.05
     min_room_area_m2: float = 1.0
     min_room_width_m: float = 0.5
@@ -76,7 +80,7 @@ class PlanParams:
             object.__setattr__(self, name, (lo, hi))
         for name in ("drafting_height_m", "floor_cell_m", "min_room_width_m", "opening_cell_m", "door_height_m", "window_height_m", "opening_rectangularity"):
             check_positive(name, getattr(self, name))
-        for name in ("corner_extension_m", "floor_margin_m", "min_room_area_m2", "min_floor_fraction", "opening_margin_m", "window_sill_m"):
+        for name in ("corner_extension_m", "floor_margin_m", "floor_closure_margin_m", "min_room_area_m2", "min_floor_fraction", "opening_margin_m", "window_sill_m"):
             check_positive(name, getattr(self, name), allow_zero=True)
 
     def to_dict(self) -> dict:

@@ -212,18 +212,36 @@ def story_rooms(mesh: Mesh, orientation: Orientation, walls: FlatWalls, story: S
     faces = shapely.get_parts(shapely.polygonize(shapely.get_parts(shapely.node(shapely.union_all(boundary)))))
     front = _wall_probe_points(walls, index, +1.0)
     behind = _wall_probe_points(walls, index, -1.0)
-    r = params.min_room_width_m / 2
+    tight = None
     out = []
     for face in faces:
         if face.area < params.min_room_area_m2:
             continue
-        opened = face.buffer(-r, join_style="mitre").buffer(r, join_style="mitre", mitre_limit=2.0).intersection(face)
-        for part in shapely.get_parts(opened):
-            if isinstance(part, Polygon) and part.area >= params.min_room_area_m2:
-                room = _classify(part, raster, wall_lines, front, behind, params)
-                if room is not None:
-                    out.append(room)
+        for part in shapely.get_parts(_opening(face, params.min_room_width_m / 2)):
+            if not (isinstance(part, Polygon) and part.area >= params.min_room_area_m2):
+                continue
+            room = _classify(part, raster, wall_lines, front, behind, params)
+            if room is None:
+                continue
+            if room[1] == "floor":
+                # where no wall closes it, the room ends where its floor does (the outline used
+                # for the arrangement lies a margin outside), less strips narrower than a door
+                # (the floor of a doorway that leads outside)
+                if tight is None:
+                    tight = raster.outline(params.floor_closure_margin_m)
+                clipped = _opening(room[0].intersection(tight), params.door_width_m[1] / 2)
+                parts = [p for p in shapely.get_parts(clipped) if isinstance(p, Polygon)]
+                if parts:
+                    best = max(parts, key=lambda p: p.area)
+                    room = (shapely.orient_polygons(Polygon(best.exterior), exterior_cw=True), "floor")
+            out.append(room)
     return out
+
+
+def _opening(shape, radius: float):
+    """Morphological opening with a square: drops the parts narrower than ``2 * radius`` and
+    keeps right-angled corners."""
+    return shape.buffer(-radius, join_style="mitre").buffer(radius, join_style="mitre", mitre_limit=2.0).intersection(shape)
 
 
 def _classify(face: Polygon, raster: FloorRaster, wall_lines, front: FloatArray, behind: FloatArray, params: PlanParams):

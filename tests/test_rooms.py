@@ -1,0 +1,154 @@
+"""Rooms, doors and windows against ground truth; IFC export; the evaluate command."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from meshplan.cli import main
+from meshplan.evaluate import evaluate
+from meshplan.export import plan_document
+from meshplan.io import LoadStats
+from meshplan.options import RunOptions
+from meshplan.pipeline import compute
+
+SCENES = [("apartment", s, {}) for s in (0, 1, 2, 5)] + [("office", s, {}) for s in (0, 2)] + [("multistory", 2, {})]
+
+
+@pytest.fixture(scope="module")
+def reports(computed):
+    out = []
+    for preset, seed, kw in SCENES:
+        scan, result = computed(preset, seed, **kw)
+        out.append(evaluate(plan_document(result), scan.truth))
+    return out
+
+
+def test_room_areas(reports):
+    errors, found, total = [], 0, 0
+    for r in reports:
+        rooms = r["rooms"]
+        found += rooms["found"]
+        total += rooms["true_rooms"]
+        errors += [abs(row["error_pct"]) for row in rooms["rows"] if row["error_pct"] is not None and row["true_area"] >= 4.0]
+    assert found / total >= 0.95
+    assert np.median(errors) <= 1.0
+    assert np.percentile(errors, 90) <= 3.0
+
+
+def test_doors_and_windows(reports):
+    tp = fp = fn = 0
+    for r in reports:
+        d = r["doors"]
+        tp_k = round(d["precision"] * d["found"])
+        tp += tp_k
+        fp += d["found"] - tp_k
+        fn += d["true"] - tp_k
+        if d["max_width_error_m"] is not None:
+            assert d["max_width_error_m"] <= 0.05
+    assert tp / (tp + fp) >= 0.9 and tp / (tp + fn) >= 0.9
+    windows = [r["windows"] for r in reports]
+    assert np.mean([w["recall"] for w in windows]) >= 0.8
+    assert np.mean([w["precision"] for w in windows]) >= 0.9
+
+
+def test_a_room_with_a_missing_wall_is_closed_by_the_floor(computed):
+    """Drop every face of one wall of a single room: the room is kept, closed by the floor."""
+    from meshplan.synthetic import SynthParams, generate
+
+    scan = generate(SynthParams(preset="room", seed=7, holes=False))
+    keep = scan.face_walls != 1
+    mesh = scan.mesh.submesh(np.flatnonzero(keep))
+    stats = LoadStats("cut", "obj", "m", 1.0, 1, mesh.n_vertices, mesh.n_faces, 0, 0, 0, mesh.n_vertices, mesh.n_faces)
+    result = compute(mesh, stats, scan.annotations, RunOptions())
+    assert len(result.rooms) == 1
+    room = result.rooms[0]
+    assert room.closed_by == "floor"
+    true_area = scan.truth["rooms"][0]["area"]
+    assert abs(room.area - true_area) / true_area < 0.08
+
+
+def test_rooms_in_plan_json_are_consistent(computed):
+    _, result = computed("apartment", 1)
+    doc = plan_document(result)
+    from shapely.geometry import Polygon
+
+    for room in doc["rooms"]:
+        poly = Polygon(room["polygon"])
+        assert poly.is_valid
+        assert poly.area == pytest.approx(room["area"], rel=1e-3)
+        xs, zs = np.array(room["polygon"]).T
+        assert room["width"] == pytest.approx(xs.max() - xs.min(), abs=1e-3)
+        assert room["depth"] == pytest.approx(zs.max() - zs.min(), abs=1e-3)
+        # counter-clockwise as seen on the plan (z down): negative shoelace in (x, z)
+        assert np.sum(xs * np.roll(zs, -1) - np.roll(xs, -1) * zs) < 0
+    labels = [r["label"] for r in doc["rooms"]]
+    assert labels == [f"Room {i + 1}" for i in range(len(labels))]
+    for o in doc["openings"]:
+        w = doc["walls"][o["wall"]]
+        a, b = np.asarray(w["start"]), np.asarray(w["end"])
+        c = np.asarray(o["center"])
+        # the opening's centre lies on its wall
+        t = np.dot(c - a, b - a) / np.dot(b - a, b - a)
+        assert 0 < t < 1 and np.linalg.norm(a + t * (b - a) - c) < 1e-3
+
+
+def test_ifc_export(computed, tmp_path):
+    ifcopenshell = pytest.importorskip("ifcopenshell")
+    import ifcopenshell.util.element as element
+    import ifcopenshell.util.placement as placement
+    from meshplan.export.ifc import ifc_bytes
+
+    _, result = computed("multistory", 1)
+    path = tmp_path / "model.ifc"
+    path.write_bytes(ifc_bytes(result))
+    f = ifcopenshell.open(str(path))
+    assert f.schema == "IFC4"
+    assert len(f.by_type("IfcProject")) == len(f.by_type("IfcSite")) == len(f.by_type("IfcBuilding")) == 1
+    storeys = sorted(f.by_type("IfcBuildingStorey"), key=lambda s: s.Elevation)
+    assert [round(s.Elevation, 4) for s in storeys] == [round(s.floor, 4) for s in result.orientation.stories]
+    walls = f.by_type("IfcWall")
+    assert len(walls) == len(result.physical_walls)
+    covered = set()
+    for w in walls:
+        ps = element.get_psets(w)
+        faces = [int(i) for i in ps["meshplan"]["faces"].split(",")]
+        covered.update(faces)
+        length = ps["Qto_WallBaseQuantities"]["Length"]
+        assert length >= max(result.walls.length[faces]) - 1e-6
+        m = placement.get_local_placement(w.ObjectPlacement)
+        # the wall's local x runs along its plan direction; its origin is its centre line start
+        pw = next(p for p in result.physical_walls if list(p.faces) == faces)
+        assert np.allclose(m[:2, 3], [pw.start[0], -pw.start[1]], atol=1e-6)
+    assert covered == set(range(len(result.walls)))
+    spaces = f.by_type("IfcSpace")
+    assert len(spaces) == len(result.rooms)
+    areas = sorted(element.get_psets(s)["Qto_SpaceBaseQuantities"]["NetFloorArea"] for s in spaces)
+    assert np.allclose(areas, sorted(r.area for r in result.rooms))
+    doors = f.by_type("IfcDoor")
+    assert 0 < len(doors) <= sum(k == "door" for k in result.openings.kind)
+    for d in doors:
+        assert d.FillsVoids and d.FillsVoids[0].RelatingOpeningElement.VoidsElements
+    sensors = f.by_type("IfcSensor")
+    assert len(sensors) == sum(k in ("sensor", "thermostat") for k in result.annotations.kinds)
+    assert len(f.by_type("IfcAnnotation")) == len(result.annotations) - len(sensors)
+    # deterministic
+    assert ifc_bytes(result) == path.read_bytes()
+
+
+def test_evaluate_command(tmp_path, capsys, computed):
+    scan, result = computed("apartment", 0)
+    plan = tmp_path / "plan.json"
+    truth = tmp_path / "truth.json"
+    doc = plan_document(result)
+    plan.write_text(json.dumps(doc))
+    truth.write_text(json.dumps(scan.truth))
+    assert main(["evaluate", str(plan), str(truth)]) == 0
+    text = capsys.readouterr().out
+    assert "Room" in text and "Err %" in text and "walls" in text
+    assert main(["evaluate", str(plan), str(truth), "--json", "-o", str(tmp_path / "r.json")]) == 0
+    report = json.loads((tmp_path / "r.json").read_text())
+    assert report["rooms"]["found"] == len(scan.truth["rooms"])
+    assert main(["evaluate", str(plan), str(tmp_path / "missing.json")]) == 2
