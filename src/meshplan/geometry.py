@@ -73,7 +73,14 @@ class Mesh:
     @cached_property
     def _cross(self) -> FloatArray:
         t = self.triangles
-        return _frozen(np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]))
+        a = t[:, 1] - t[:, 0]
+        b = t[:, 2] - t[:, 0]
+        # written out: np.cross is several times slower on (F, 3) arrays
+        c = np.empty_like(a)
+        c[:, 0] = a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1]
+        c[:, 1] = a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2]
+        c[:, 2] = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
+        return _frozen(c)
 
     @cached_property
     def face_areas(self) -> FloatArray:
@@ -92,7 +99,8 @@ class Mesh:
     @cached_property
     def face_centroids(self) -> FloatArray:
         """``(F, 3)`` triangle centroids."""
-        return _frozen(self.triangles.mean(axis=1))
+        t = self.triangles
+        return _frozen((t[:, 0] + t[:, 1] + t[:, 2]) / 3.0)
 
     @property
     def area(self) -> float:

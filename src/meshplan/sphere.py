@@ -173,7 +173,7 @@ def axial_peaks(
     radius_deg: float = 8.0,
     separation_deg: float = 25.0,
     bins: int = 2000,
-    max_samples: int = 120_000,
+    max_samples: int = 60_000,
 ) -> list[AxialPeak]:
     """The dominant axes of a set of directions, treating ``d`` and ``-d`` as the same axis.
 

@@ -86,7 +86,7 @@ class Orientation:
 
 
 def _check_scale(mesh: Mesh, params: OrientParams) -> None:
-    size = float(np.median(np.sqrt(2.0 * mesh.face_areas)))
+    size = float(np.sqrt(2.0 * np.median(mesh.face_areas)))
     if size > _MAX_TRIANGLE_SIZE_M:
         hint = "check the units of the scan (--units)"
         for unit, factor in (("mm", 0.001), ("cm", 0.01), ("in", 0.0254)):

@@ -107,13 +107,18 @@ def sign_evidence(centroids: FloatArray, normals: FloatArray, areas: FloatArray,
     vert = np.abs(nh) < np.cos(np.radians(45.0))
     cv, hv = centroids[vert], h[vert]
     plan = np.floor(np.c_[cv @ e1, cv @ e2] / _OCCUPANCY_CELL_M).astype(np.int64)
-    key = plan[:, 0] * 1_000_003 + plan[:, 1]
+    if len(plan):
+        plan -= plan.min(axis=0)
+        span = int(plan[:, 1].max()) + 1
+        key = plan[:, 0] * span + plan[:, 1]
+        cells = int(key.max()) + 1
     occ = np.zeros(2)
     clutter = np.zeros(2)
     for a, b in intervals:
         t = (hv - a) / (b - a)
-        occ[0] += len(np.unique(key[(t > 0.1) & (t < 0.4)]))
-        occ[1] += len(np.unique(key[(t > 0.6) & (t < 0.9)]))
+        if len(plan):  # occupied cells, counted on a dense grid (no sorting)
+            occ[0] += np.count_nonzero(np.bincount(key[(t > 0.1) & (t < 0.4)], minlength=cells))
+            occ[1] += np.count_nonzero(np.bincount(key[(t > 0.6) & (t < 0.9)], minlength=cells))
         th = (h - a) / (b - a)
         mid = horiz & (th > 0.05) & (th < 0.95)
         clutter[0] += areas[mid & (th < 0.5)].sum()
@@ -143,28 +148,33 @@ def _refine_kmeans(normals: FloatArray, areas: FloatArray, rough: FloatArray, co
     """The paper's Method 2: spherical k-means with k = 1 inside a narrowing cone.
 
     Normals are folded onto the hemisphere of ``rough`` (floors and ceilings both count,
-    whatever their winding) and the cluster centre is re-estimated until it settles at each
-    cone angle.
+    whatever their winding) and the cluster centre is re-estimated until the faces in the cone
+    stop changing at each cone angle (or for 10 rounds: in narrow cones the selection can swap
+    a few faces back and forth forever, moving the centre by thousandths of a degree). Each
+    narrower cone only looks at the normals of the
+    previous one (plus a 2 degree margin), which changes nothing unless the centre moves by more
+    than the margin, and makes the narrow cones cheap.
     """
     g = unit(rough)
     dots = normals @ g
-    widest = np.cos(np.radians(cones_deg[0] + 10.0))
-    cand = np.flatnonzero(np.abs(dots) >= widest)
+    cand = np.flatnonzero(np.abs(dots) >= np.cos(np.radians(cones_deg[0] + 10.0)))
     n = normals[cand] * np.sign(dots[cand])[:, None]
     a = areas[cand]
     used = 0
     for cone in cones_deg:
         cos_c = np.cos(np.radians(cone))
-        for _ in range(20):
+        previous = None
+        for _ in range(10):
             sel = n @ g >= cos_c
             if not sel.any():
+                return g, 0
+            if previous is not None and np.array_equal(sel, previous):
                 break
-            new = unit((n[sel] * a[sel, None]).sum(axis=0))
-            done = float(new @ g) > 1 - 1e-14
-            g = new
-            if done:
-                break
+            g = unit(a[sel] @ n[sel])
+            previous = sel
         used = int(sel.sum())
+        keep = n @ g >= np.cos(np.radians(cone + 2.0))
+        n, a = n[keep], a[keep]
     return g, used
 
 
@@ -204,7 +214,7 @@ def estimate_gravity(mesh: Mesh, params: OrientParams) -> GravityEstimate:
         best = max(candidates, key=lambda c: c.score)
         # the k-means refinement ignores the sign; decide it on the refined axis, whose levels
         # are sharp (a rough axis a few degrees off smears them)
-        axis, _ = _refine_kmeans(normals, areas, best.axis, params.gravity_cones_deg)
+        axis, used = _refine_kmeans(normals, areas, best.axis, params.gravity_cones_deg)
         evidence = sign_evidence(centroids, normals, areas, axis, params)
         if abs(evidence) < 0.05:
             # no evidence either way: follow the file's convention (its nearest axis points up)
@@ -218,7 +228,10 @@ def estimate_gravity(mesh: Mesh, params: OrientParams) -> GravityEstimate:
         axis = _bbox_axis(mesh)
         up = axis if axis @ rough >= 0 else -axis
         return GravityEstimate(up, "bbox", unit(rough), up, evidence, tuple(candidates), 0)
-    up, used = _refine_kmeans(normals, areas, rough, params.gravity_cones_deg)
+    if params.up == "auto":
+        up = rough  # already refined; only its sign was decided since
+    else:
+        up, used = _refine_kmeans(normals, areas, rough, params.gravity_cones_deg)
     if used == 0:
         raise GeometryError(
             f"no floor found: no surface faces within {params.gravity_cones_deg[0]:.0f} degrees of the up axis {np.round(rough, 3).tolist()}",

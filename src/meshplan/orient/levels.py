@@ -87,15 +87,15 @@ def altitude_histogram(heights: FloatArray, weights: FloatArray, bucket_m: float
     return edges, hist
 
 
-def _weighted_median(sorted_h: FloatArray, cum_w: FloatArray, i0: int, i1: int) -> float | None:
-    if i1 <= i0:
+def _weighted_median(h: FloatArray, w: FloatArray, lo: float, resolution: float = 5e-4) -> float | None:
+    """Weighted median of ``h`` (all >= ``lo``) to ``resolution``, by a fine histogram: no sort."""
+    total = w.sum()
+    if not len(h) or total <= 0:
         return None
-    base = cum_w[i0 - 1] if i0 > 0 else 0.0
-    total = cum_w[i1 - 1] - base
-    if total <= 0:
-        return None
-    k = int(np.searchsorted(cum_w[i0:i1], base + 0.5 * total))
-    return float(sorted_h[i0 + min(k, i1 - i0 - 1)])
+    idx = ((h - lo) / resolution).astype(np.int64)
+    cum = np.cumsum(np.bincount(idx, weights=w))
+    k = int(np.searchsorted(cum, 0.5 * total))
+    return float(lo + (k + 0.5) * resolution)
 
 
 def find_spikes(heights: FloatArray, weights: FloatArray, bucket_m: float, fraction: float) -> list[Spike]:
@@ -113,14 +113,14 @@ def find_spikes(heights: FloatArray, weights: FloatArray, bucket_m: float, fract
     for p in order:
         if all(abs(p - q) > 2 for q in chosen):
             chosen.append(int(p))
-    order_h = np.argsort(heights, kind="stable")
-    sh, cw = heights[order_h], np.cumsum(weights[order_h])
     spikes = []
     for p in chosen:
         centre = edges[p + 1]  # the boundary between the two buckets of the pair
+        near = np.abs(heights - centre) < 2 * bucket_m
+        h, w = heights[near], weights[near]
         for _ in range(3):  # re-centre the window on the weighted median
-            i0, i1 = np.searchsorted(sh, [centre - bucket_m, centre + bucket_m])
-            med = _weighted_median(sh, cw, int(i0), int(i1))
+            inside = np.abs(h - centre) < bucket_m
+            med = _weighted_median(h[inside], w[inside], centre - bucket_m)
             if med is None:
                 break
             centre = med

@@ -2,7 +2,7 @@
 :mod:`meshplan.export`'s job)."""
 
 from .params import RenderParams
-from .plans import drafting_figure, pen_and_ink_figure, segments_figure
+from .plans import drafting_figure, pen_and_ink_figure, pen_and_ink_raster, segments_figure
 from .plots import levels_figure, normals_figure
 from .sheet import Sheet, figure_bytes, make_sheet
 
@@ -15,5 +15,6 @@ __all__ = [
     "make_sheet",
     "normals_figure",
     "pen_and_ink_figure",
+    "pen_and_ink_raster",
     "segments_figure",
 ]

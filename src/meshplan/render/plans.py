@@ -26,14 +26,24 @@ def _story_title(kind: str, story_index: int, n_stories: int, floor: float, ceil
     return f"{kind} {where}  (floor {floor / unit:.2f} {name}, ceiling {ceiling / unit:.2f} {name})"
 
 
-def pen_and_ink_figure(plan: PenAndInkPlan, annotations: Annotations, sheet: Sheet, params: RenderParams, n_stories: int = 1):
-    """All slices overlaid in translucent ink; what stands at many heights is dark."""
+def pen_and_ink_raster(plan: PenAndInkPlan, sheet: Sheet, params: RenderParams) -> np.ndarray:
+    """The RGBA ink image of a pen-and-ink plan, pixel for pixel on the sheet."""
+    counts = rasterize_segments(plan.slices.segments, plan.slices.level, sheet)
+    return ink_rgba(counts, params.opacity)
+
+
+def pen_and_ink_figure(
+    plan: PenAndInkPlan, annotations: Annotations, sheet: Sheet, params: RenderParams, n_stories: int = 1, ink: np.ndarray | None = None
+):
+    """All slices overlaid in translucent ink; what stands at many heights is dark.
+
+    ``ink`` is the image of :func:`pen_and_ink_raster`, computed here when not given.
+    """
     s = plan.story
     n = len(plan.slices.heights) - 1
     fig, ax = new_figure(sheet, _story_title(f"Pen-and-ink ({n} slices, opacity {params.opacity:g})", s.index, n_stories, s.floor, s.ceiling, params.imperial), params)
-    counts = rasterize_segments(plan.slices.segments, plan.slices.level, sheet)
     ax.patch.set_alpha(0.0)  # the ink sits under the axes
-    place_raster(fig, ax, ink_rgba(counts, params.opacity))
+    place_raster(fig, ax, ink if ink is not None else pen_and_ink_raster(plan, sheet, params))
     draw_annotations(ax, annotations.labels, annotations.kinds, annotations.positions, annotations.directions)
     draw_scale_bar(fig, sheet, params)
     return fig
@@ -110,10 +120,24 @@ def segments_figure(mesh: Mesh, walls: FlatWalls, story: int, sheet: Sheet, para
 
     # colour by rank among kept segments; a strided palette so that neighbours differ
     ranks = np.unique(s[kept], return_inverse=True)[1] if kept.any() else np.zeros(0, int)
-    palette = to_rgba_array(SEGMENT_COLORS)
-    colors = palette[(ranks * 5) % len(palette)] if kept.any() else np.zeros((0, 4))
-    ax.scatter(c[~kept, 0], c[~kept, 2], s=0.3, c="#c8c8c8", linewidths=0, rasterized=True, zorder=1)
-    ax.scatter(c[kept, 0], c[kept, 2], s=0.8, c=colors, linewidths=0, rasterized=True, zorder=2)
+    palette = (to_rgba_array(SEGMENT_COLORS) * 255).astype(np.uint8)
+    rows, cols = sheet.raster_shape
+    image = np.zeros((rows, cols, 4), dtype=np.uint8)
+    px = ((c[:, 0] - sheet.xmin) / sheet.pixel_m).astype(np.int64)
+    pz = ((c[:, 2] - sheet.zmin) / sheet.pixel_m).astype(np.int64)
+    ok = (px >= 0) & (px < cols) & (pz >= 0) & (pz < rows)
+    grey = ok & ~kept
+    image[pz[grey], px[grey]] = (200, 200, 200, 255)
+    colored = ok & kept
+    image[pz[colored], px[colored]] = palette[(ranks[colored[kept]] * 5) % len(palette)]
+    # centroids are a few pixels apart: thicken each dot to 2x2 pixels
+    from scipy.ndimage import maximum_filter
+
+    alpha = image[..., 3]
+    grown = maximum_filter(image, size=(2, 2, 1))
+    image = np.where(alpha[..., None] > 0, image, grown)
+    ax.patch.set_alpha(0.0)
+    place_raster(fig, ax, image)
     n_kept = int(np.unique(s[kept]).size)
     n_all = int(np.unique(s).size)
     ax.text(0.01, 0.01, f"{n_kept} wall segments kept of {n_all}", transform=ax.transAxes, fontsize=6, color="#333333")

@@ -207,42 +207,44 @@ def draw_annotations(ax, labels, kinds, positions, directions, probe_m: float = 
 def rasterize_segments(segments: np.ndarray, level: np.ndarray, sheet: Sheet) -> np.ndarray:
     """``(rows, cols)`` number of distinct slices whose segments cross each pixel.
 
-    Segments are sampled at half-pixel steps; a pixel counts each slice once, so a slice's
-    chain of segments does not darken itself where its segments meet.
+    Segments are sampled at one-pixel steps (the ink is dilated afterwards, so no gap shows);
+    a pixel counts each slice once, so a slice's chain of segments does not darken itself where
+    its segments meet. Distinct (pixel, slice) pairs are found by sorting integer keys, which is
+    much faster than hashing them.
     """
     rows, cols = sheet.raster_shape
     if not len(segments):
         return np.zeros((rows, cols), dtype=np.int32)
     p = sheet.pixel_m
-    a = (segments[:, 0] - [sheet.xmin, sheet.zmin]) / p
-    b = (segments[:, 1] - [sheet.xmin, sheet.zmin]) / p
-    length = np.hypot(*(b - a).T)
-    n = np.ceil(2 * length).astype(np.int64) + 1
+    origin = np.array([sheet.xmin, sheet.zmin])
+    a = (segments[:, 0] - origin) / p
+    b = (segments[:, 1] - origin) / p
+    n = np.ceil(np.hypot(*(b - a).T)).astype(np.int64) + 1
     seg = np.repeat(np.arange(len(a)), n)
     t = (np.arange(len(seg)) - np.repeat(np.cumsum(n) - n, n)) / np.repeat(np.maximum(n - 1, 1), n)
     pts = a[seg] + (b - a)[seg] * t[:, None]
-    c = np.floor(pts[:, 0]).astype(np.int64)
-    r = np.floor(pts[:, 1]).astype(np.int64)
+    c = pts[:, 0].astype(np.int64)
+    r = pts[:, 1].astype(np.int64)
     inside = (c >= 0) & (c < cols) & (r >= 0) & (r < rows)
-    pix = r[inside] * cols + c[inside]
-    lv = np.asarray(level)[seg[inside]]
+    lv = np.asarray(level, dtype=np.int64)[seg[inside]]
     n_levels = int(lv.max()) + 1 if len(lv) else 1
-    key = np.unique(pix * n_levels + lv)
-    return np.bincount(key // n_levels, minlength=rows * cols).reshape(rows, cols).astype(np.int32)
+    key = np.sort((r[inside] * cols + c[inside]) * n_levels + lv)
+    first = np.r_[True, key[1:] != key[:-1]] if len(key) else np.zeros(0, bool)
+    return np.bincount(key[first] // n_levels, minlength=rows * cols).reshape(rows, cols).astype(np.int32)
 
 
 def ink_rgba(counts: np.ndarray, opacity: float, color: str = "#14213d", width_px: int = 2) -> np.ndarray:
     """Translucent ink: a pixel crossed by ``k`` slices has opacity ``1 - (1 - opacity)^k``."""
     from matplotlib.colors import to_rgb
-    from scipy.ndimage import grey_dilation
+    from scipy.ndimage import maximum_filter
 
+    c = np.minimum(counts, 255).astype(np.uint8)
     if width_px > 1:
-        counts = grey_dilation(counts, size=(width_px, width_px))
-    alpha = 1.0 - (1.0 - opacity) ** counts.astype(np.float64)
-    rgba = np.empty(counts.shape + (4,), dtype=np.float32)
-    rgba[..., :3] = to_rgb(color)
-    rgba[..., 3] = alpha
-    return rgba
+        c = maximum_filter(c, size=width_px)
+    lut = np.empty((256, 4), dtype=np.uint8)
+    lut[:, :3] = np.round(np.array(to_rgb(color)) * 255)
+    lut[:, 3] = np.round(255 * (1.0 - (1.0 - opacity) ** np.arange(256)))
+    return lut[c]
 
 
 _RC = {"svg.fonttype": "none", "svg.hashsalt": "meshplan", "pdf.compression": 6, "path.simplify": True}
@@ -255,6 +257,6 @@ def figure_bytes(fig, fmt: str) -> bytes:
     meta = {"png": {"Software": "meshplan"}, "svg": {"Date": None, "Creator": "meshplan"}, "pdf": {"CreationDate": None, "Creator": "meshplan", "Producer": "meshplan"}}[fmt]
     buf = io.BytesIO()
     with matplotlib.rc_context(_RC):
-        kwargs = {"pil_kwargs": {"compress_level": 4}} if fmt == "png" else {}
+        kwargs = {"pil_kwargs": {"compress_level": 1}} if fmt == "png" else {}
         fig.savefig(buf, format=fmt, metadata=meta, **kwargs)
     return buf.getvalue()

@@ -1,0 +1,140 @@
+"""meshplan benchmarks (``make bench``): timings as ratios to the paper's figures and to the
+targets of the issues. Not a test: it prints, and exits 1 when a target is missed.
+
+The paper (Table 1) timed its residential building B2, 285,840 faces: orienting the mesh
+T_o = 24.08 s, finding flat walls T_p = 81.5 s, slicing and drawing T_sd = 0.9 s (106.5 s in all).
+
+Scans are synthetic apartments of about 300k and 3M faces (cached in bench-out/). In-process
+stage timings are the median of three warm runs; the end-to-end runs are fresh processes of
+``meshplan run`` (imports and all), timed from outside.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import resource
+import statistics
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+OUT = ROOT / "bench-out"
+PAPER = {"orient": 24.08, "walls": 81.5, "slice_draw": 0.9, "total": 24.08 + 81.5 + 0.9}
+PAPER_FACES = 285_840
+BIN = Path(sys.executable).parent / "meshplan"
+
+rows: list[tuple[str, float, float | None, float | None]] = []  # name, seconds, target, paper
+
+
+def record(name: str, seconds: float, target: float | None = None, paper: float | None = None) -> None:
+    rows.append((name, seconds, target, paper))
+    ratio = f"{paper / seconds:8.1f}x faster than the paper" if paper else ""
+    verdict = "" if target is None else ("ok" if seconds <= target else "MISSED")
+    tgt = f"target {target:6.2f}" if target is not None else " " * 13
+    print(f"  {name:<42s} {seconds:8.3f} s  {tgt}  {verdict:6s} {ratio}", flush=True)
+
+
+def scan(faces: int, preset: str = "apartment", seed: int = 1) -> Path:
+    path = OUT / f"{preset}-{faces}-{seed}" / "scan.ply"
+    if not path.exists():
+        from meshplan.export.synth import write_synthetic
+        from meshplan.synthetic import SynthParams, generate
+
+        print(f"generating a {faces:,}-face {preset} ...", flush=True)
+        s = generate(SynthParams(preset=preset, seed=seed, target_faces=faces))
+        write_synthetic(s, path.parent, "ply", force=True)
+    return path
+
+
+def in_process(path: Path, repeats: int = 3) -> None:
+    import meshplan
+    from meshplan.export import render_files
+    from meshplan.slicing import plane_heights, slice_mesh
+
+    annotations = path.parent / "annotations.json"
+    meshplan.run(path, annotations=annotations)  # warm up (numba cache, fonts)
+    stages: dict[str, list[float]] = {}
+    for _ in range(repeats):
+        r = meshplan.run(path, annotations=annotations, output=OUT / "run", force=True)
+        for k, v in r.timings.items():
+            stages.setdefault(k, []).append(v)
+    med = {k: statistics.median(v) for k, v in stages.items()}
+    faces = r.input.faces
+    print(f"\n{path.name}: {faces:,} faces, {len(r.walls)} walls, {len(r.rooms)} rooms (median of {repeats} warm runs)")
+    record("load (read + clean)", med["load"])
+    record("orient + levels + stories (T_o)", med["orient"], 0.3, PAPER["orient"])
+    record("flat walls (T_p)", med["walls"], 0.5, PAPER["walls"])
+    record("rooms + openings", med["rooms"], 0.3)
+    record("slice + draw all plans (T_sd)", med["slice_draw"], 1.5, PAPER["slice_draw"])
+    record("write (models, CAD, report)", med["write"])
+    record("pipeline total, in process", med["total"], None, PAPER["total"])
+    # slicing alone: 100 levels of one story
+    st = r.orientation.stories[0]
+    tri = r.mesh.triangles[r.orientation.face_story == 0]
+    times = []
+    for _ in range(5):
+        t0 = time.perf_counter()
+        slice_mesh(tri, plane_heights(st.floor, st.ceiling, 100))
+        times.append(time.perf_counter() - t0)
+    record("slicing 101 planes", statistics.median(times), 0.2)
+    t0 = time.perf_counter()
+    files = render_files(r)
+    record("render every file (no disk)", time.perf_counter() - t0)
+    if "report.html" in files:
+        size = len(files["report.html"]) / 1e6
+        print(f"  report.html: {size:.1f} MB (target < 15 MB) {'ok' if size < 15 else 'MISSED'}")
+        if size >= 15:
+            rows.append(("report.html size (MB)", size, 15.0, None))
+
+
+def end_to_end(path: Path, target: float, label: str, memory_gb: float | None = None) -> None:
+    out = OUT / f"e2e-{path.parent.name}"
+    cmd = [str(BIN), "run", str(path), "-a", str(path.parent / "annotations.json"), "-o", str(out), "--force", "--quiet"]
+    subprocess.run(cmd, check=True)  # warm the numba cache for this environment
+    before = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
+    t0 = time.perf_counter()
+    subprocess.run(cmd, check=True)
+    dt = time.perf_counter() - t0
+    peak = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
+    record(f"meshplan run end to end, {label}", dt, target, PAPER["total"] if label.startswith("300k") else None)
+    if memory_gb is not None:
+        gb = max(peak, before) / 1e6  # ru_maxrss is in kB on Linux
+        verdict = "ok" if gb <= memory_gb else "MISSED"
+        print(f"  peak memory of meshplan run, {label:<24s} {gb:6.2f} GB  target {memory_gb:.2f}  {verdict}")
+        if gb > memory_gb:
+            rows.append((f"peak memory {label} (GB)", gb, memory_gb, None))
+    doc = json.loads((out / "plan.json").read_text())
+    print(f"  ({doc['input']['faces']:,} faces; pipeline total {doc['timings']['total']:.2f} s inside the process)")
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--quick", action="store_true", help="skip the 3-million-face run")
+    args = ap.parse_args()
+    OUT.mkdir(exist_ok=True)
+    os.environ.setdefault("PYTHONHASHSEED", "0")
+    print("meshplan benchmarks (this machine:", os.cpu_count(), "cores)")
+    p300 = scan(300_000)
+    in_process(p300)
+    print()
+    end_to_end(p300, 3.0, "300k faces", memory_gb=None)
+    if not args.quick:
+        p3m = scan(3_000_000)
+        end_to_end(p3m, 30.0, "3M faces", memory_gb=3.0)
+    batch = ROOT / "benchmarks" / "bench_batch.py"
+    if batch.exists():
+        print()
+        subprocess.run([sys.executable, str(batch)], check=False)
+    missed = [r for r in rows if r[2] is not None and r[1] > r[2]]
+    print(f"\n{len(rows)} measurements, {len(missed)} targets missed" + (": " + ", ".join(r[0] for r in missed) if missed else ""))
+    return 1 if missed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
