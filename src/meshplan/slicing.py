@@ -85,22 +85,24 @@ def slice_mesh(triangles: ArrayLike, heights: ArrayLike) -> Slices:
         return empty
     offsets = np.arange(len(faces)) - np.repeat(np.cumsum(count) - count, count)
     level = np.repeat(first, count) + offsets
-    t = tri[faces]
-    d = t[:, :, 1] - h[level][:, None]  # signed heights of the corners
+    d = y[faces] - h[level][:, None]  # signed heights of the corners
     above = d >= 0
-    # an edge (a, b) crosses when exactly one end is above; each cut triangle has two
-    a_idx = np.array([0, 1, 2])
-    b_idx = np.array([1, 2, 0])
-    crosses = above[:, a_idx] != above[:, b_idx]
-    ok = crosses.sum(axis=1) == 2
-    t, d, crosses, faces, level = t[ok], d[ok], crosses[ok], faces[ok], level[ok]
-    da, db = d[:, a_idx], d[:, b_idx]
-    s = np.where(crosses, da / np.where(crosses, da - db, 1.0), 0.0)
-    pa, pb = t[:, a_idx], t[:, b_idx]
-    points = pa + (pb - pa) * s[:, :, None]  # (m, 3 edges, 3)
-    # the two crossing edges, in edge order
-    order = np.argsort(~crosses, axis=1, kind="stable")[:, :2]
-    seg = np.take_along_axis(points, order[:, :, None], axis=1)[:, :, [0, 2]]
+    n_above = above.sum(axis=1)
+    cut = (n_above == 1) | (n_above == 2)
+    faces, level, d, above, n_above = faces[cut], level[cut], d[cut], above[cut], n_above[cut]
+    # the corner alone on its side of the plane; both cut edges start from it
+    odd = np.where(n_above == 1, np.argmax(above, axis=1), np.argmin(above, axis=1))
+    u1, u2 = (odd + 1) % 3, (odd + 2) % 3
+    rows = np.arange(len(faces))
+    t = tri[faces]
+    p0 = t[rows, odd][:, [0, 2]]
+    d0 = d[rows, odd]
+
+    def cut_point(u: np.ndarray) -> np.ndarray:
+        du = d[rows, u]
+        return p0 + (t[rows, u][:, [0, 2]] - p0) * (d0 / (d0 - du))[:, None]
+
+    seg = np.stack([cut_point(u1), cut_point(u2)], axis=1)
     # a top corner touching the plane makes a single point, not a segment
     real = np.any(seg[:, 0] != seg[:, 1], axis=1)
     return Slices(h, seg[real], level[real].astype(np.int64), faces[real].astype(np.int64))

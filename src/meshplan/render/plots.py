@@ -59,6 +59,7 @@ def normals_figure(normals: FloatArray, areas: FloatArray, orientation: Orientat
     cb = fig.colorbar(im, cax=cax)
     cb.set_label("face area per bucket (m²)", fontsize=7)
     cb.ax.tick_params(labelsize=6)
+    cb.ax.minorticks_off()  # a log colour bar has dozens of minor ticks, slow to draw
     centres = [d.normal for d in orientation.alignment.directions] + [np.array([0.0, 1.0, 0.0]), np.array([0.0, -1.0, 0.0])]
     ct, cp = to_spherical(np.array(centres))
     ax.scatter(ct, cp, s=40, facecolors="none", edgecolors="#00e5ff", linewidths=1.3)

@@ -247,7 +247,7 @@ def ink_rgba(counts: np.ndarray, opacity: float, color: str = "#14213d", width_p
     return lut[c]
 
 
-_RC = {"svg.fonttype": "none", "svg.hashsalt": "meshplan", "pdf.compression": 6, "path.simplify": True}
+_RC = {"svg.fonttype": "none", "svg.hashsalt": "meshplan", "pdf.compression": 1, "path.simplify": True}
 
 
 def figure_bytes(fig, fmt: str) -> bytes:
