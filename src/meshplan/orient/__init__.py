@@ -96,6 +96,19 @@ def _check_scale(mesh: Mesh, params: OrientParams) -> None:
         raise GeometryError(f"implausible scale: the median triangle is {size:.3g} m across", hint)
 
 
+def _check_floor(normals: FloatArray, heights: FloatArray, areas: FloatArray, floor: float, params: OrientParams) -> None:
+    """Walls stand on the floor: when much of the wall area lies well below the lowest floor
+    found, that "floor" is a table top or a ceiling, and the real floor is not in the scan."""
+    walls = np.abs(normals[:, 1]) < np.sin(np.radians(params.wall_exclusion_deg))
+    total = areas[walls].sum()
+    below = areas[walls & (heights < floor - 0.3)].sum()
+    if total > 0 and below > 0.25 * total:
+        raise GeometryError(
+            f"no floor found: {100 * below / total:.0f} % of the wall area lies below the lowest horizontal surface",
+            "make sure the scan includes the floor, or name the up axis with --up",
+        )
+
+
 def orient(mesh: Mesh, params: OrientParams | None = None) -> Orientation:
     """Level the mesh, find its floors, ceilings and stories, and turn its walls onto the axes.
 
@@ -133,6 +146,7 @@ def orient(mesh: Mesh, params: OrientParams | None = None) -> Orientation:
             r_level, normals, centroids, levels = level(up)
     heights = centroids[:, 1]
     lowest = levels.stories[0].floor
+    _check_floor(normals, heights, areas, lowest, params)
     highest = levels.stories[-1].ceiling
     alignment = align_walls(normals, areas, heights, lowest, highest, params)
     if not alignment.directions:

@@ -10,7 +10,10 @@ from the floor and ceiling structure:
 1. *Axis.* The dominant axes of the face normals, sign ignored, are candidates. Floors, ceilings
    and the tops of furniture make the up axis the heaviest in almost every scan; a candidate whose
    two main parallel surfaces are closer than a room height (the walls of a corridor) is demoted,
-   as is one whose surfaces are not spread along the axis at all (a single wall).
+   as is one whose surfaces are not spread along the axis at all (a single wall). When the floor
+   or the ceiling is missing, two walls can outweigh what is left, so the file's convention breaks
+   near-ties: a candidate within 45 degrees of the input y axis (HoloLens, glTF) counts 1.5 times,
+   one within 45 degrees of z (many scan datasets) 1.25 times.
 2. *Refinement.* The paper's Method 2, with normals folded onto the axis' hemisphere so that
    floors and ceilings both contribute whatever their winding (the sign does not matter yet).
 3. *Sign.* Furniture stands on the floor and the lower part of a room is scanned more densely than
@@ -210,7 +213,8 @@ def estimate_gravity(mesh: Mesh, params: OrientParams) -> GravityEstimate:
             if p.weight < 0.05 * top:
                 break
             plaus = _plausibility(centroids, normals, areas, p.axis, params)
-            candidates.append(Candidate(p.axis, p.weight, plaus, p.weight * plaus))
+            prior = 1.5 if abs(p.axis[1]) >= np.cos(np.radians(45.0)) else 1.25 if abs(p.axis[2]) >= np.cos(np.radians(45.0)) else 1.0
+            candidates.append(Candidate(p.axis, p.weight, plaus, p.weight * plaus * prior))
         best = max(candidates, key=lambda c: c.score)
         # the k-means refinement ignores the sign; decide it on the refined axis, whose levels
         # are sharp (a rough axis a few degrees off smears them)
