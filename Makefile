@@ -4,7 +4,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed-stamp
 
-.PHONY: demo test bench clean lint
+.PHONY: demo test bench clean lint browser
 
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -17,7 +17,15 @@ demo: $(STAMP)
 	$(BIN)/meshplan run demo-out/scan/scan.obj --annotations demo-out/scan/annotations.json --output demo-out/plans --force
 	@echo "Plans, models and plan.json are in demo-out/plans/ (open drafting-0.png, pen-and-ink-0.png, report.html)."
 
-test: $(STAMP)
+# The report's browser tests run in Debian's Chromium; install it when we can (root with apt),
+# else those tests are skipped with a message saying so.
+browser:
+	@test -x /usr/bin/chromium || { command -v apt-get >/dev/null && [ "$$(id -u)" = 0 ] && \
+	  { DEBIAN_FRONTEND=noninteractive apt-get install -y -q chromium >/dev/null 2>&1 || \
+	    { apt-get update -q >/dev/null 2>&1 && DEBIAN_FRONTEND=noninteractive apt-get install -y -q chromium >/dev/null 2>&1; }; }; } || \
+	  echo "Chromium could not be installed: the browser tests will be skipped"
+
+test: $(STAMP) browser
 	$(BIN)/python -m pytest -n 2 -q tests
 
 bench: $(STAMP)

@@ -245,6 +245,65 @@ def schema() -> None:
     typer.echo(json.dumps(plan_schema(), indent=2))
 
 
+@app.command()
+def batch(
+    inputs: list[str] = typer.Argument(..., help="Directories of scans (searched recursively), glob patterns (quote them) or scan files."),
+    output: Path = typer.Option(..., "--output", "-o", help="Batch directory: one directory per scan, plus summary.csv and summary.json. May exist."),
+    workers: int = typer.Option(1, "--workers", "-j", help="Scans processed at once by local worker processes (0 = one per core)."),
+    scheduler: Optional[str] = typer.Option(None, "--scheduler", help="Run on a Dask cluster at this address (tcp://host:port); its workers must see the same files at the same paths."),
+    force: bool = typer.Option(False, "--force", "-f", help="Replace existing per-scan directories (else those scans fail and keep their old results)."),
+    units: Optional[Units] = typer.Option(None, "--units", help=_d("units", "Unit of the scans' coordinates.")),
+    up: Optional[Up] = typer.Option(None, "--up", help=_d("up", "Input axis that is roughly up, or auto.")),
+    gravity: Optional[Gravity] = typer.Option(None, "--gravity", help=_d("gravity_method", "kmeans (paper's Method 2) or bbox (Method 1).")),
+    slices: Optional[int] = typer.Option(None, "--slices", help=_d("slices", "Slicing intervals of the pen-and-ink plan (n + 1 planes).")),
+    imperial: Optional[bool] = typer.Option(None, "--imperial/--metric", help=_d("imperial", "Scale bars and areas in feet (or metres).")),
+    dpi: Optional[int] = typer.Option(None, "--dpi", help=_d("dpi", "PNG resolution (dots per inch).")),
+    max_faces: Optional[int] = typer.Option(None, "--max-faces", help="Refuse larger scans [default: what fits in memory]."),
+    set_: list[str] = typer.Option([], "--set", help="Any other parameter, NAME=VALUE (see plan.json 'parameters')."),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="Print nothing but the failed scans' errors."),
+    as_json: bool = typer.Option(False, "--json", help="Print the summary as JSON on stdout."),
+) -> None:
+    """Run many scans, one output directory each, and summarize them.
+
+    Scans run in parallel across --workers (each scan draws in its own worker; --set
+    processes=N changes that). Annotations are taken from <scan stem>.annotations.json or annotations.json beside each scan.
+    A scan that fails is reported and skipped; the others go on. Exit status: 0 when every scan
+    succeeded, 1 when some failed (see summary.csv), 2 for a usage error (no scans found, bad
+    option, unwritable output, no Dask scheduler).
+    """
+    from .batch import BatchInterrupted, BatchProgress, ScansFailed, find_annotations, find_scans, print_batch_summary, run_batch
+
+    _setup_logging(0, quiet)
+    params: dict[str, Any] = dict(
+        units=units.value if units else None,
+        up=up.value if up else None,
+        gravity_method=gravity.value if gravity else None,
+        slices=slices,
+        imperial=imperial,
+        dpi=dpi,
+        max_faces=max_faces,
+    )
+    params = {k: v for k, v in params.items() if v is not None}
+    params.update(_parse_set(set_))
+    # several inputs (e.g. an unquoted glob the shell expanded) are concatenated, duplicates dropped
+    scans = list(dict.fromkeys(p for spec in inputs for p in find_scans(spec, exclude=output)))
+    jobs = [(s, find_annotations(s)) for s in scans]
+    try:
+        with BatchProgress(enabled=not quiet and not as_json) as bar:
+            summary = run_batch(jobs, output, workers=workers, scheduler=scheduler, force=force, progress=bar.update, **params)
+    except KeyboardInterrupt:
+        raise BatchInterrupted("interrupted", f"the finished scans are in {output} (see summary.csv)") from None
+    if as_json:
+        typer.echo(json.dumps(summary.to_dict(), indent=2))
+    elif not quiet:
+        print_batch_summary(summary)
+    if quiet:
+        for row in summary.failed:
+            click.echo(f"error: {row.scan}: {row.error}", err=True)
+    if summary.failed:  # exit status 1 (main() prints the message)
+        raise ScansFailed(f"{len(summary.failed)} of {len(summary.rows)} scans failed", f"see {output / 'summary.csv'}")
+
+
 def _usage_error_types() -> tuple[type[BaseException], ...]:
     """Command-line usage errors of typer (which ships its own copy of click) and of click."""
     types: list[type[BaseException]] = [click.ClickException]

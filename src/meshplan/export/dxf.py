@@ -91,6 +91,25 @@ def drafting_dxf(
     if title:
         pts = np.concatenate([np.asarray(wall_segments).reshape(-1, 2), np.asarray(slice_segments).reshape(-1, 2), np.zeros((1, 2))])
         msp.add_text(title, height=0.25, dxfattribs={"layer": "TEXT"}).set_placement((float(pts[:, 0].min()), float(-pts[:, 1].min()) + 0.5))
-    buf = io.StringIO()
-    doc.write(buf)
+    return _reproducible_bytes(doc)
+
+
+def _reproducible_bytes(doc) -> bytes:
+    """The DXF text without the dates and random GUIDs ezdxf writes, so that the same plan gives
+    the same file."""
+    import ezdxf
+
+    from ezdxf.document import CREATED_BY_EZDXF, WRITTEN_BY_EZDXF
+
+    meta = doc.ezdxf_metadata()
+    meta[CREATED_BY_EZDXF] = f"ezdxf {ezdxf.__version__} for meshplan"
+    meta[WRITTEN_BY_EZDXF] = f"ezdxf {ezdxf.__version__} for meshplan"
+    doc._update_ezdxf_metadata = lambda: None  # it would stamp the current time
+    saved = ezdxf.options.write_fixed_meta_data_for_testing
+    ezdxf.options.write_fixed_meta_data_for_testing = True
+    try:
+        buf = io.StringIO()
+        doc.write(buf)
+    finally:
+        ezdxf.options.write_fixed_meta_data_for_testing = saved
     return buf.getvalue().encode("utf-8")

@@ -182,8 +182,34 @@ def check_size(path: Path, file_type: str, max_faces: int | None) -> int:
     return faces
 
 
+_OBJ_ARITY = {"v": 3, "vn": 3, "vt": 2, "f": 3}
+
+
+def _check_obj_ending(path: Path) -> None:
+    """An OBJ cut short mid-line ends with an incomplete statement; say so instead of reading a
+    silently shortened mesh."""
+    with open(path, "rb") as fh:
+        fh.seek(max(0, path.stat().st_size - 512))
+        tail = fh.read().decode("utf-8", "replace")
+    last = tail.rsplit("\n", 1)[-1].strip()
+    parts = last.split()
+    if parts and parts[0] in _OBJ_ARITY:
+        numbers = parts[1:]
+        ok = len(numbers) >= _OBJ_ARITY[parts[0]]
+        if parts[0] != "f":
+            try:
+                [float(x) for x in numbers]
+            except ValueError:
+                ok = False
+        if not ok:
+            raise InputError(f"{path}: the file ends in the middle of a line ({last[:40]!r}): it was cut short", "export or copy the scan again")
+
+
 def _read_with_trimesh(path: Path, file_type: str) -> tuple[np.ndarray, np.ndarray, int]:
     import trimesh
+
+    if file_type == "obj":
+        _check_obj_ending(path)
 
     try:
         # OBJ: one geometry per object, as HoloLens exports write one object per surface patch
@@ -211,7 +237,7 @@ def _read_with_trimesh(path: Path, file_type: str) -> tuple[np.ndarray, np.ndarr
     if not faces:
         if points_only:
             raise InputError(
-                f"{path}: holds points but no triangles (a point cloud)",
+                f"{path}: holds points but no triangles (a point cloud, or a file cut short)",
                 "mesh the point cloud first (e.g. Poisson reconstruction) or export the scan as a mesh",
             )
         raise InputError(f"{path}: holds no triangles", "export the scan again as a triangle mesh")

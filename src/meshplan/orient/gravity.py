@@ -7,13 +7,13 @@ z-up datasets, HoloLens 2 meshes whose frame is tilted by up to 40 degrees, and 
 that may point the normals either way. So with ``up="auto"`` the rough direction is found first,
 from the floor and ceiling structure:
 
-1. *Axis.* The dominant axes of the face normals, sign ignored, are candidates. Floors, ceilings
-   and the tops of furniture make the up axis the heaviest in almost every scan; a candidate whose
-   two main parallel surfaces are closer than a room height (the walls of a corridor) is demoted,
-   as is one whose surfaces are not spread along the axis at all (a single wall). When the floor
-   or the ceiling is missing, two walls can outweigh what is left, so the file's convention breaks
-   near-ties: a candidate within 45 degrees of the input y axis (HoloLens, glTF) counts 1.5 times,
-   one within 45 degrees of z (many scan datasets) 1.25 times.
+1. *Axis.* The dominant axes of the face normals, sign ignored, are candidates, scored by the
+   area facing along each plus twice its largest single level (:func:`_axis_evidence`): floors
+   and ceilings make the up axis the heaviest, and when the ceiling is missing the floor, one
+   level under every room, still outweighs walls split into many parallel planes. A candidate
+   whose two main parallel surfaces are closer than a room height (the walls of a corridor) is
+   demoted, as is one whose surfaces are not spread along the axis at all (a single wall). The
+   file's own axes play no part: the same building gives the same answer however it is turned.
 2. *Refinement.* The paper's Method 2, with normals folded onto the axis' hemisphere so that
    floors and ceilings both contribute whatever their winding (the sign does not matter yet).
 3. *Sign.* Furniture stands on the floor and the lower part of a room is scanned more densely than
@@ -47,6 +47,10 @@ _AXES = {
     "-z": (0.0, 0.0, -1.0),
 }
 
+#: Parallel surfaces closer than this (m) are one slab (a sunken floor, the faces of one
+#: partition), not the two sides of a corridor.
+_SAME_SLAB_M = 0.5
+
 #: Plan cell size (m) of the occupancy test deciding the sign of up.
 _OCCUPANCY_CELL_M = 0.1
 
@@ -56,7 +60,7 @@ class Candidate:
     """A candidate up axis and how it scored."""
 
     axis: FloatArray
-    weight: float  # area of faces within the peak's cap
+    weight: float  # see _axis_evidence
     plausibility: float
     score: float
 
@@ -130,21 +134,34 @@ def sign_evidence(centroids: FloatArray, normals: FloatArray, areas: FloatArray,
     return float(np.log((occ[0] + 1.0) / (occ[1] + 1.0)) + np.log((clutter[0] + eps) / (clutter[1] + eps)))
 
 
-def _plausibility(centroids: FloatArray, normals: FloatArray, areas: FloatArray, axis: FloatArray, params: OrientParams) -> float:
-    """How much the surfaces perpendicular to ``axis`` look like floors and ceilings (0-1)."""
+def _axis_evidence(centroids: FloatArray, normals: FloatArray, areas: FloatArray, axis: FloatArray, params: OrientParams) -> tuple[float, float]:
+    """How much the surfaces perpendicular to ``axis`` look like floors and ceilings.
+
+    Returns
+    -------
+    weight
+        The area facing along the axis (either way) plus twice the area of its largest single
+        level. The total alone is the paper's "largest cluster", which a scan without a ceiling
+        halves while the two opposite walls of a room stay whole; the floor, though, is one
+        level spanning every room where the walls split into many parallel planes, so doubling
+        the largest level gives back to the floor what the missing ceiling took away.
+    plausibility
+        0-1: 0.3 when the two main parallel surfaces are closer than a room height (the walls
+        of a corridor), 0.1 when almost nothing stands parallel to the axis (no walls).
+    """
     nh = normals @ axis
     aligned = np.abs(nh) >= np.cos(np.radians(params.horizontal_tolerance_deg))
     h = centroids[aligned] @ axis
     spikes = find_spikes(h, areas[aligned], params.level_bucket_m, 0.25)
+    weight = float(areas[aligned].sum()) + 2.0 * max((s.weight for s in spikes), default=0.0)
     if len(spikes) >= 2:
         span = spikes[-1].height - spikes[0].height
-        if span < params.min_room_height_m:
-            return 0.3  # two big parallel surfaces closer than a room is high: corridor walls
-    # a building has walls: surfaces parallel to the axis
+        if _SAME_SLAB_M < span < params.min_room_height_m:
+            return weight, 0.3
     vertical = np.abs(nh) <= np.sin(np.radians(params.wall_exclusion_deg))
     if areas[vertical].sum() < 0.05 * areas.sum():
-        return 0.1
-    return 1.0
+        return weight, 0.1
+    return weight, 1.0
 
 
 def _refine_kmeans(normals: FloatArray, areas: FloatArray, rough: FloatArray, cones_deg: tuple[float, ...]) -> tuple[FloatArray, int]:
@@ -212,9 +229,8 @@ def estimate_gravity(mesh: Mesh, params: OrientParams) -> GravityEstimate:
         for p in peaks:
             if p.weight < 0.05 * top:
                 break
-            plaus = _plausibility(centroids, normals, areas, p.axis, params)
-            prior = 1.5 if abs(p.axis[1]) >= np.cos(np.radians(45.0)) else 1.25 if abs(p.axis[2]) >= np.cos(np.radians(45.0)) else 1.0
-            candidates.append(Candidate(p.axis, p.weight, plaus, p.weight * plaus * prior))
+            weight, plaus = _axis_evidence(centroids, normals, areas, p.axis, params)
+            candidates.append(Candidate(p.axis, weight, plaus, weight * plaus))
         best = max(candidates, key=lambda c: c.score)
         # the k-means refinement ignores the sign; decide it on the refined axis, whose levels
         # are sharp (a rough axis a few degrees off smears them)

@@ -190,7 +190,16 @@ def find_rooms(mesh: Mesh, orientation: Orientation, walls: FlatWalls, params: P
     for story in orientation.stories:
         found.extend((story.index, poly, how) for poly, how in story_rooms(mesh, orientation, walls, story, params, slab_tolerance_m))
     found.sort(key=lambda r: (r[0], round(r[1].centroid.y, 1), round(r[1].centroid.x, 1)))
-    return tuple(Room(s, f"Room {i + 1}", poly, how) for i, (s, poly, how) in enumerate(found))
+    return tuple(Room(s, f"Room {i + 1}", _canonical(poly), how) for i, (s, poly, how) in enumerate(found))
+
+
+def _canonical(poly: Polygon) -> Polygon:
+    """The same ring started at its top-left point (smallest z, then x, to the millimetre), so
+    that the polygon does not depend on the order in which shapely happened to build it."""
+    ring = np.asarray(poly.exterior.coords)[:-1]
+    key = np.round(ring, 3)
+    start = int(np.lexsort((key[:, 0], key[:, 1]))[0])
+    return Polygon(np.roll(ring, -start, axis=0))
 
 
 def story_rooms(mesh: Mesh, orientation: Orientation, walls: FlatWalls, story: Story, params: PlanParams, slab_tolerance_m: float) -> list[tuple[Polygon, str]]:

@@ -1,0 +1,305 @@
+"""report.html: self-contained, deterministic, and usable in a real headless Chromium (the 3D
+view, the plans, and placing an annotation by clicking the model, exported and read back)."""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import meshplan
+from meshplan.export.report import report_html, view_meshes
+from meshplan.export.synth import write_synthetic
+from meshplan.synthetic import SynthParams, generate
+
+CHROMIUM = Path("/usr/bin/chromium")
+CHROMIUM_ARGS = [
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-quic",
+    "--no-first-run",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+]
+#: Set to a directory to keep the screenshots the browser test takes.
+SHOTS = os.environ.get("MESHPLAN_REPORT_SHOTS")
+
+
+@pytest.fixture(scope="module")
+def room(tmp_path_factory):
+    """A small synthetic room (no furniture, so that its floor is in view), run once."""
+    tmp = tmp_path_factory.mktemp("report")
+    scan = write_synthetic(generate(SynthParams(preset="room", seed=5, furniture=False)), tmp / "scan")
+    result = meshplan.run(scan, annotations=tmp / "scan" / "annotations.json", output=tmp / "out")
+    return tmp, scan, result
+
+
+def _files(out: Path) -> dict[str, bytes]:
+    return {p.name: p.read_bytes() for p in out.iterdir() if p.suffix in (".svg", ".png")}
+
+
+def _floor_target(result, layer_mesh, depth: float = 0.5) -> np.ndarray:
+    """The centroid of the shown floor face nearest the middle of the floor's width, ``depth``
+    of the way down the plan (plan frame). The default 3D camera looks from the bottom of the
+    plan (+z) at 45 degrees, so the near wall hides the floor behind it: a target at
+    ``depth=0.25`` is in view."""
+    up = layer_mesh.face_normals[:, 1] > 0.95
+    low = np.abs(layer_mesh.face_centroids[:, 1] - result.stories[0].story.floor) < 0.05
+    c = layer_mesh.face_centroids[up & low]
+    lo, hi = c.min(axis=0), c.max(axis=0)
+    mid = 0.5 * (lo + hi)
+    mid[2] = lo[2] + depth * (hi[2] - lo[2])
+    return c[np.argmin(np.linalg.norm((c - mid)[:, [0, 2]], axis=1))]
+
+
+def _distance_to_surface(mesh, p: np.ndarray, radius: float = 0.3) -> float:
+    """Distance from ``p`` to the faces of ``mesh`` it projects into (faces near it only)."""
+    near = np.flatnonzero(np.linalg.norm(mesh.face_centroids - p, axis=1) < radius)
+    t = mesh.triangles[near]
+    n = mesh.face_normals[near]
+    d = np.einsum("ij,ij->i", p - t[:, 0], n)
+    q = p - d[:, None] * n  # p projected on each face's plane
+    e1, e2, w = t[:, 1] - t[:, 0], t[:, 2] - t[:, 0], q - t[:, 0]
+    d11, d12, d22 = (e1 * e1).sum(1), (e1 * e2).sum(1), (e2 * e2).sum(1)
+    w1, w2 = (w * e1).sum(1), (w * e2).sum(1)
+    den = d11 * d22 - d12 * d12
+    u, v = (d22 * w1 - d12 * w2) / den, (d11 * w2 - d12 * w1) / den
+    inside = (u >= -1e-9) & (v >= -1e-9) & (u + v <= 1 + 1e-9)
+    return float(np.min(np.abs(d[inside]))) if inside.any() else np.inf
+
+
+# --------------------------------------------------------------------------------------------
+# Without a browser
+
+
+def test_report_written_self_contained_and_deterministic(room):
+    tmp, _, result = room
+    page = (tmp / "out" / "report.html").read_text(encoding="utf-8")
+    assert "report.html" in result.files
+    # nothing to fetch: every script inline, no external style, image or font, no MathJax
+    # (plotly's bundle names URLs for maps it never draws here; the browser test checks that
+    # no request is made at all)
+    assert not re.search(r"<script[^>]*\ssrc\s*=", page, re.I)
+    assert "Plotly" in page and "plotly.js v" in page
+    markup = re.sub(r"<script[^>]*>.*?</script>", "", page, flags=re.S)
+    assert not re.search(r"""\s(src|href)\s*=\s*["']?(https?:)?//""", markup, re.I)
+    assert "<link" not in markup.lower() and "<iframe" not in markup.lower()
+    assert not re.search(r"url\(\s*['\"]?(https?:)?//", markup)
+    assert "@import" not in page and "@font-face" not in page and "mathjax" not in markup.lower()
+    # every story's plans inline, the figures as data URIs, the tables
+    for sp in result.stories:
+        i = sp.story.index
+        for kind in ("pen-and-ink", "drafting"):
+            assert re.search(rf'<figure class="plan" id="plan-{kind}-{i}"><svg ', page)
+    assert 'id="img-levels" src="data:image/png;base64,' in page
+    assert 'id="img-normals" src="data:image/png;base64,' in page
+    for table in ("timings", "parameters", "input", "stories"):
+        assert f'<table id="{table}"' in page
+    assert "24.08" in page and "285,840" in page  # the paper's figures beside ours
+    if json.loads((tmp / "out" / "plan.json").read_text()).get("rooms"):
+        assert '<table id="rooms-0"' in page
+    # the same result gives the same page
+    files = _files(tmp / "out")
+    assert report_html(result, files) == report_html(result, files)
+
+
+def test_svg_ids_are_prefixed_per_plan(room):
+    tmp, _, result = room
+    page = report_html(result, _files(tmp / "out"))
+    ids = re.findall(r'\sid="([^"]+)"', page)
+    assert len(ids) == len(set(ids)), "two elements share an id"
+    for ref in set(re.findall(r'href="#([^"]+)"', page)):
+        assert ref in ids
+
+
+def test_large_scans_are_subsampled_by_whole_faces(room):
+    tmp, _, result = room
+    view = view_meshes(result, max_faces=5000)
+    assert view.decimated and view.faces_shown <= 5000
+    page = report_html(result, _files(tmp / "out"), max_faces=5000)
+    assert f"Showing {view.faces_shown:,} of {view.faces_total:,} faces" in page
+    # every face shown is a face of the scan, unchanged
+    scan = result.mesh.triangles.reshape(len(result.mesh.triangles), -1)
+    for layer in view.layers:
+        if layer.role != "scan":
+            continue
+        shown = layer.mesh.triangles.reshape(layer.mesh.n_faces, -1)
+        rows = np.concatenate([scan, shown]).view(np.dtype((np.void, scan.dtype.itemsize * 9))).ravel()
+        _, first = np.unique(rows, return_index=True)
+        assert len(first) == len(scan), "a shown face is not a face of the scan"
+    # the full view says it shows everything
+    full = view_meshes(result)
+    assert not full.decimated and f"Showing {full.faces_shown:,} of {full.faces_total:,} faces" in report_html(result, _files(tmp / "out"))
+
+
+# --------------------------------------------------------------------------------------------
+# In Chromium
+
+
+@pytest.fixture(scope="module")
+def browser():
+    if not CHROMIUM.exists():
+        pytest.skip("headless browser tests need Debian's chromium at /usr/bin/chromium (apt-get install -y chromium)")
+    sync_api = pytest.importorskip("playwright.sync_api", reason="the browser tests need the playwright package")
+    with sync_api.sync_playwright() as p:
+        b = p.chromium.launch(executable_path=str(CHROMIUM), args=CHROMIUM_ARGS)
+        yield b
+        b.close()
+
+
+class _Page:
+    """A page that records every request and every console error."""
+
+    def __init__(self, browser, url: str) -> None:
+        self.context = browser.new_context(viewport={"width": 1400, "height": 1000}, accept_downloads=True)
+        self.page = self.context.new_page()
+        self.requests: list[str] = []
+        self.errors: list[str] = []
+        self.page.on("request", lambda r: self.requests.append(r.url))
+        self.page.on("console", lambda m: self.errors.append(m.text) if m.type == "error" else None)
+        self.page.on("pageerror", lambda e: self.errors.append(str(e)))
+        self.url = url
+        self.page.goto(url)
+        self.page.wait_for_function("window.meshplanReport && (meshplanReport.ready || meshplanReport.error)", timeout=60_000)
+        assert self.page.evaluate("meshplanReport.error") is None
+
+    def settle(self, point) -> dict:
+        """Where ``point`` is drawn, once the camera has stopped moving."""
+        last = None
+        for _ in range(50):
+            xy = self.page.evaluate("p => meshplanReport.toScreen(p)", list(map(float, point)))
+            if last and xy and abs(xy["x"] - last["x"]) < 0.05 and abs(xy["y"] - last["y"]) < 0.05:
+                return xy
+            last = xy
+            self.page.wait_for_timeout(100)
+        raise AssertionError("the camera did not settle")
+
+    def external_requests(self) -> list[str]:
+        # blob: is the download the page makes itself, not a network request
+        return [u for u in self.requests if u != self.url and not u.startswith("blob:")]
+
+    def close(self) -> None:
+        self.context.close()
+
+
+def _shot(locator, path: Path) -> np.ndarray:
+    from PIL import Image
+
+    locator.screenshot(path=str(path))
+    if SHOTS:
+        shutil.copy(path, Path(SHOTS) / f"report_{path.name}")
+    return np.asarray(Image.open(path).convert("RGB")).astype(np.int16)
+
+
+def _share_unlike(img: np.ndarray, rgb) -> float:
+    return float(np.mean(np.abs(img - np.array(rgb, dtype=np.int16)).max(axis=2) > 24))
+
+
+@pytest.mark.browser
+def test_report_in_chromium_click_to_annotate_round_trip(room, browser):
+    tmp, scan, result = room
+    report = tmp / "out" / "report.html"
+    pg = _Page(browser, report.as_uri())
+    page = pg.page
+    try:
+        # the layers and every story's plans are there
+        names = page.evaluate("document.getElementById('model3d').data.map(t => t.name)")
+        for sp in result.stories:
+            i = sp.story.index
+            assert f"story {i}: scan" in names and f"story {i}: flat walls" in names
+            assert page.locator(f"#plan-pen-and-ink-{i} svg").count() == 1
+            assert page.locator(f"#plan-drafting-{i} svg").count() == 1
+        for kind in set(result.annotations.kinds):
+            assert kind in names
+
+        # the model and the plans are drawn (not blank)
+        page.screenshot(path=str(tmp / "page.png"), full_page=True)
+        if SHOTS:
+            shutil.copy(tmp / "page.png", Path(SHOTS) / "report_test_page.png")
+        model = _shot(page.locator("#model3d"), tmp / "model.png")
+        assert _share_unlike(model, (0xF4, 0xF5, 0xF7)) > 0.10, "the 3D view is blank"
+        plan = _shot(page.locator("#plan-pen-and-ink-0 svg"), tmp / "plan.png")
+        assert _share_unlike(plan, (255, 255, 255)) > 0.02, "the pen-and-ink plan is blank"
+        drafting = _shot(page.locator("#plan-drafting-0 svg"), tmp / "drafting.png")
+        assert _share_unlike(drafting, (255, 255, 255)) > 0.01, "the drafting plan is blank"
+        assert page.evaluate("document.getElementById('img-levels').naturalWidth") > 0
+        assert page.evaluate("document.getElementById('img-normals').naturalWidth") > 0
+
+        # a layer can be switched on from the legend
+        walls = names.index("story 0: flat walls")
+        page.locator(".legend .traces", has_text="story 0: flat walls").click()
+        page.wait_for_function(f"document.getElementById('model3d').data[{walls}].visible === true")
+        page.locator(".legend .traces", has_text="story 0: flat walls").click()
+        page.wait_for_function(f"document.getElementById('model3d').data[{walls}].visible === 'legendonly'")
+
+        # click the floor with the mouse, in the default 3D view (far half of the room: in view)
+        layer = view_meshes(result).layers[0]
+        target = _floor_target(result, layer.mesh, depth=0.25)
+        xy = pg.settle(target)
+        page.mouse.click(xy["x"], xy["y"])
+        page.wait_for_function("meshplanReport.pending !== null")
+        picked = np.array(page.evaluate("meshplanReport.pending.position"))
+        assert np.linalg.norm(picked - target) < 0.02
+        # plotly's own GPU pick at that pixel agrees with our camera (nearest vertex of the face)
+        plotly_pick = page.evaluate("meshplanReport.lastPlotlyClick")
+        if plotly_pick is not None:
+            assert np.linalg.norm(np.array(plotly_pick["position"]) - target) < 0.3
+
+        page.select_option("#ann-kind", "sensor")
+        page.fill("#ann-label", "Clicked 1")
+        page.click("#ann-add")
+        assert page.locator('#ann-table tr[data-label="Clicked 1"]').count() == 1
+        with page.expect_download() as dl:
+            page.click("#ann-export")
+        exported = tmp / "exported.json"
+        dl.value.save_as(exported)
+
+        assert pg.errors == [], pg.errors
+        assert pg.external_requests() == [], pg.external_requests()
+    finally:
+        pg.close()
+
+    # the scan's annotations come back unchanged, and the new one is there
+    doc = json.loads(exported.read_text())
+    original = json.loads((tmp / "scan" / "annotations.json").read_text())["annotations"]
+    assert doc["annotations"][: len(original)] == original
+    new = doc["annotations"][-1]
+    assert (new["label"], new["kind"]) == ("Clicked 1", "sensor")
+
+    # fed back to meshplan, it lands where it was clicked, on the floor, probing up
+    again = meshplan.run(scan, annotations=exported)
+    np.testing.assert_allclose(again.transform, result.transform, atol=1e-12)
+    k = again.annotations.labels.index("Clicked 1")
+    position = again.annotations.positions[k]
+    assert np.linalg.norm(position - target) < 0.02
+    assert _distance_to_surface(result.mesh, position) < 0.01
+    assert again.annotations.directions[k] @ [0.0, 1.0, 0.0] > 0.95
+
+
+@pytest.mark.browser
+def test_click_on_subsampled_model_stays_on_the_surface(room, browser):
+    tmp, _, result = room
+    page_path = tmp / "small.html"
+    page_path.write_text(report_html(result, _files(tmp / "out"), max_faces=6000), encoding="utf-8")
+    pg = _Page(browser, page_path.as_uri())
+    try:
+        assert pg.page.evaluate("meshplanReport.data.faces_shown") <= 6000
+        pg.page.click("#view-top")
+        layer = view_meshes(result, max_faces=6000).layers[0]
+        for target in (_floor_target(result, layer.mesh), _floor_target(result, result.mesh) + [0.31, 0.0, -0.27]):
+            xy = pg.settle(target)
+            pg.page.mouse.click(xy["x"], xy["y"])
+            pg.page.wait_for_function("meshplanReport.pending !== null")
+            picked = np.array(pg.page.evaluate("meshplanReport.pending.position"))
+            pg.page.click("#ann-cancel")
+            assert np.linalg.norm((picked - target)[[0, 2]]) < 0.02
+            assert _distance_to_surface(result.mesh, picked) < 0.01
+        assert pg.errors == [] and pg.external_requests() == []
+    finally:
+        pg.close()
