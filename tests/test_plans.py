@@ -49,6 +49,39 @@ def test_wall_scores_can_fail(computed):
     assert wall_scores(flipped, truth)["f1"] < 0.2
 
 
+def test_upper_part_of_a_double_height_wall_is_a_wall():
+    """A story-1 wall in the plane of a story-0 wall, scanned only up to 1 m above its floor (a
+    void whose walls the scanner saw from the gallery), is still a wall of story 1: it continues
+    the wall below. A wall of story 1 cut the same way with nothing below it is furniture."""
+    from meshplan.synthetic import SynthParams, generate
+
+    scan = generate(SynthParams(preset="multistory", seed=0, holes=False))
+    truth = scan.truth
+    walls = truth["walls"]
+
+    def plane(w):
+        n = np.asarray(w["normal"])
+        return tuple(np.round(n, 3)), round(float(n @ w["start"]), 2)
+
+    lower = {plane(w) for w in walls if w["story"] == 0}
+    upper = [i for i, w in enumerate(walls) if w["story"] == 1 and plane(w) in lower and abs(np.subtract(w["end"], w["start"])).max() > 2.0]
+    assert upper, "the preset has no story-1 wall above a story-0 wall"
+    target = upper[0]
+    # heights of the face centroids in the truth frame
+    to_truth = np.linalg.inv(np.asarray(truth["transform"]))
+    c = scan.mesh.face_centroids @ to_truth[:3, :3].T + to_truth[:3, 3]
+    floor1 = truth["stories"][1]["floor"]
+    drop = (scan.face_walls == target) & (c[:, 1] > floor1 + 1.0)
+    mesh = scan.mesh.submesh(np.flatnonzero(~drop))
+    stats = LoadStats("cut", "obj", "m", 1.0, 1, mesh.n_vertices, mesh.n_faces, 0, 0, 0, mesh.n_vertices, mesh.n_faces)
+    result = compute(mesh, stats, scan.annotations, RunOptions())
+    p = result.transform @ np.asarray(truth["transform"])
+    t = mapped_truth_walls(p, truth)[target]
+    doc = plan_document(result)
+    found = [w for w in doc["walls"] if w["story"] == 1]
+    assert wall_scores(found, [t])["recall"] == 1.0
+
+
 def test_walls_face_into_rooms_and_reach_floor_to_ceiling(computed):
     scan, result = computed("apartment", 1)
     walls, st = result.walls, result.orientation.stories[0]

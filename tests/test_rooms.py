@@ -27,13 +27,16 @@ def reports(computed):
 
 
 def test_room_areas(reports):
-    errors, found, total = [], 0, 0
+    errors, found, total, computed, extra = [], 0, 0, 0, 0
     for r in reports:
         rooms = r["rooms"]
         found += rooms["found"]
         total += rooms["true_rooms"]
+        computed += rooms["computed_rooms"]
+        extra += len(rooms["extra"])
         errors += [abs(row["error_pct"]) for row in rooms["rows"] if row["error_pct"] is not None and row["true_area"] >= 4.0]
     assert found / total >= 0.95
+    assert extra / computed <= 0.05  # no rooms split in two, none outside the building
     assert np.median(errors) <= 1.0
     assert np.percentile(errors, 90) <= 3.0
 

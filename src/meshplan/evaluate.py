@@ -145,9 +145,21 @@ def room_scores(plan_rooms: list[dict], truth: dict, p: np.ndarray) -> dict[str,
             }
         )
     errs = [abs(r["error_pct"]) for r in rows if r["error_pct"] is not None and r["true_area"] >= 4.0]
+    # computed rooms that match no true room (a room split in two, a space outside the building)
+    true_polys = [
+        (t["story"], Polygon(_map_xz(p, t["polygon"], truth["stories"][t["story"]]["floor"])).buffer(0)) for t in truth.get("rooms", [])
+    ]
+    extra = [
+        r["label"]
+        for r, cp in computed
+        if not any(s == r["story"] and cp.intersects(tp) and cp.intersection(tp).area / cp.union(tp).area >= ROOM_IOU for s, tp in true_polys)
+    ]
     return {
         "rows": rows,
         "found": found,
+        "computed_rooms": len(computed),
+        "extra": extra,
+        "precision": (len(computed) - len(extra)) / len(computed) if computed else None,
         "true_rooms": len(rows),
         "found_fraction": found / len(rows) if rows else None,
         "median_abs_error_pct": float(np.median(errs)) if errs else None,
@@ -254,6 +266,8 @@ def format_report(report: dict) -> str:
             f"rooms found {r['found']}/{r['true_rooms']}; |error| over rooms >= 4 m2: median "
             + (f"{med:.2f} %, 90th percentile {p90:.2f} %" if med is not None else "-")
         )
+        if r.get("extra"):
+            lines.append(f"rooms matching no true room: {', '.join(r['extra'])}")
     for kind in ("doors", "windows"):
         if kind in report:
             d = report[kind]

@@ -33,6 +33,9 @@ class PlanParams:
         (scans round off the corner between floor and wall).
     floor_cell_m
         Grid cell of the floor raster (where the floor was scanned).
+    footprint_closing_m
+        The story's footprint (its floor and everything standing on it) is closed over gaps up
+        to this size before its outline closes the rooms that walls leave open.
     min_room_area_m2, min_room_width_m
         Smaller or narrower faces of the wall arrangement are not rooms (wall interiors,
         slivers between wall lines and the floor outline).
@@ -58,6 +61,7 @@ class PlanParams:
     floor_margin_m: float = 0.15
     floor_closure_margin_m: float = 0.05
     floor_cell_m: float = 0.05
+    footprint_closing_m: float = 0.3
     min_room_area_m2: float = 1.0
     min_room_width_m: float = 0.5
     min_floor_fraction: float = 0.3
@@ -80,7 +84,7 @@ class PlanParams:
             object.__setattr__(self, name, (lo, hi))
         for name in ("drafting_height_m", "floor_cell_m", "min_room_width_m", "opening_cell_m", "door_height_m", "window_height_m", "opening_rectangularity"):
             check_positive(name, getattr(self, name))
-        for name in ("corner_extension_m", "floor_margin_m", "floor_closure_margin_m", "min_room_area_m2", "min_floor_fraction", "opening_margin_m", "window_sill_m"):
+        for name in ("corner_extension_m", "floor_margin_m", "floor_closure_margin_m", "footprint_closing_m", "min_room_area_m2", "min_floor_fraction", "opening_margin_m", "window_sill_m"):
             check_positive(name, getattr(self, name), allow_zero=True)
 
     def to_dict(self) -> dict:

@@ -5,15 +5,18 @@ measured rooms by hand in Rhino).
    wall end is extended, by at most ``corner_extension_m``, to the nearest line of another wall
    it meets (an L corner extends both walls to their intersection, a T junction extends the stem
    to the face it meets).
-2. *Arrangement.* The extended walls, plus the outline of the floor (grown by
-   ``floor_margin_m`` so that it stays outside the walls), are noded and polygonized with
-   shapely: every bounded face is a candidate room. Walls run through door openings (an opening
-   does not split a flat wall), so rooms are closed across doors.
+2. *Arrangement.* The extended walls, plus the outline of the story's footprint (its floor and
+   everything standing on it, grown by ``floor_margin_m`` so that it stays outside the walls),
+   are noded and polygonized with shapely: every bounded face is a candidate room. Walls run
+   through door openings (an opening does not split a flat wall), so rooms are closed across
+   doors. The footprint rather than the floor alone: real scans rarely see the floor up to the
+   walls, since furniture stands along them.
 3. *Rooms.* Parts of a face narrower than a room (the inside of a partition, the strip between
-   the outer walls and the floor outline) are cut off, since a room can leak through them into
-   another face. A part is a room when it is large enough, mostly floored, and the walls along it
-   face into it. A room whose boundary follows the floor outline instead of walls (a wall the
-   scan missed) is kept and marked ``closed_by="floor"``.
+   the outer walls and the outline) are cut off, since a room can leak through them into
+   another face. A part is a room when it is large enough and mostly floored. A room whose
+   boundary follows the outline instead of walls (a wall the scan missed) is kept, ends where
+   the footprint does, and is marked ``closed_by="floor"``; a space beyond a wall seen only
+   from its other side (a corridor glimpsed through a door) is such a room too.
 
 The room polygon is the net floor area between the inner wall faces; its points run
 counter-clockwise as seen on the plan (x to the right, z down the page).
@@ -33,6 +36,7 @@ from ..walls import FlatWalls
 from .params import PlanParams
 
 FOOT_M = 0.3048
+
 
 
 @dataclass(frozen=True, eq=False)
@@ -127,19 +131,48 @@ def sample_triangles(triangles: FloatArray, spacing: float) -> FloatArray:
     return np.concatenate(out)
 
 
+def _raster(pts: FloatArray, cell: float, like: FloorRaster | None = None) -> FloorRaster:
+    """Cells holding at least one of ``pts`` (x, z), on the grid of ``like`` when given."""
+    if like is None:
+        if not len(pts):
+            return FloorRaster(0.0, 0.0, cell, np.zeros((1, 1), dtype=bool))
+        x0, z0 = pts[:, 0].min() - cell, pts[:, 1].min() - cell
+        shape = (int((pts[:, 1].max() - z0) / cell) + 2, int((pts[:, 0].max() - x0) / cell) + 2)
+        like = FloorRaster(float(x0), float(z0), cell, np.zeros(shape, dtype=bool))
+    grid = np.zeros_like(like.grid)
+    c = np.floor((pts[:, 0] - like.x0) / cell).astype(np.int64)
+    r = np.floor((pts[:, 1] - like.z0) / cell).astype(np.int64)
+    ok = (r >= 0) & (r < grid.shape[0]) & (c >= 0) & (c < grid.shape[1])
+    grid[r[ok], c[ok]] = True
+    return FloorRaster(like.x0, like.z0, cell, grid)
+
+
 def floor_raster(mesh: Mesh, orientation: Orientation, story: Story, tolerance_m: float, cell: float) -> FloorRaster:
     """The story's floor surface rasterized at ``cell``."""
     floor = slab_faces(mesh.face_centroids[:, 1], mesh.face_normals[:, 1], (story,), tolerance_m, ceilings=False)
     floor &= orientation.face_story == story.index
-    pts = sample_triangles(mesh.triangles[floor], cell * 0.7)
-    if not len(pts):
-        return FloorRaster(0.0, 0.0, cell, np.zeros((1, 1), dtype=bool))
-    x0, z0 = pts[:, 0].min() - cell, pts[:, 2].min() - cell
-    c = np.floor((pts[:, 0] - x0) / cell).astype(np.int64)
-    r = np.floor((pts[:, 2] - z0) / cell).astype(np.int64)
-    grid = np.zeros((r.max() + 2, c.max() + 2), dtype=bool)
-    grid[r, c] = True
-    return FloorRaster(float(x0), float(z0), cell, grid)
+    return _raster(sample_triangles(mesh.triangles[floor], cell * 0.7)[:, [0, 2]], cell)
+
+
+def footprint_raster(mesh: Mesh, orientation: Orientation, story: Story, floor: FloorRaster, closing_m: float) -> FloorRaster:
+    """Where the story stands in plan: its floor and everything standing on it (walls,
+    furniture), on the floor's grid, closed over gaps up to ``closing_m`` and with its holes
+    filled.
+
+    Real scans rarely see the floor up to the walls: furniture stands along them and hides it.
+    The floor alone would close the rooms far inside their walls; the footprint reaches them.
+    """
+    from scipy.ndimage import binary_closing, binary_fill_holes
+
+    faces = np.flatnonzero(orientation.face_story == story.index)
+    h = mesh.face_centroids[faces, 1]
+    faces = faces[(h > story.floor) & (h < story.ceiling)]
+    pts = sample_triangles(mesh.triangles[faces], floor.cell * 0.7)[:, [0, 2]]
+    grid = _raster(pts, floor.cell, floor).grid | floor.grid
+    k = max(1, int(round(closing_m / floor.cell)))
+    pad = np.pad(grid, k)
+    grid = binary_closing(pad, np.ones((2 * k + 1, 2 * k + 1), dtype=bool))[k:-k, k:-k]
+    return FloorRaster(floor.x0, floor.z0, floor.cell, binary_fill_holes(grid))
 
 
 def extend_walls(walls: FlatWalls, index: np.ndarray, reach_m: float) -> tuple[FloatArray, FloatArray]:
@@ -172,16 +205,6 @@ def extend_walls(walls: FlatWalls, index: np.ndarray, reach_m: float) -> tuple[F
     return u_lo, u_hi
 
 
-def _wall_probe_points(walls: FlatWalls, index: np.ndarray, side: float, step: float = 0.2, inset: float = 0.05) -> FloatArray:
-    """Points just in front of (``side=+1``) or behind (``-1``) each wall, every ``step``."""
-    pts = []
-    for i in index:
-        n = max(2, int(np.ceil((walls.u_max[i] - walls.u_min[i]) / step)))
-        u = np.linspace(walls.u_min[i] + inset, walls.u_max[i] - inset, n)
-        pts.append(u[:, None] * walls.tangent[i] + (walls.offset[i] + side * inset) * walls.normal[i])
-    return np.concatenate(pts) if pts else np.zeros((0, 2))
-
-
 def find_rooms(mesh: Mesh, orientation: Orientation, walls: FlatWalls, params: PlanParams | None = None, slab_tolerance_m: float = 0.1) -> tuple[Room, ...]:
     """Rooms of every story, labelled ``Room 1``, ``Room 2``, ... story by story, then from the
     top of the plan down and from left to right."""
@@ -212,39 +235,51 @@ def story_rooms(mesh: Mesh, orientation: Orientation, walls: FlatWalls, story: S
         for k, i in enumerate(index)
     ]
     wall_lines = MultiLineString(lines) if lines else None
-    outline = raster.outline(params.floor_margin_m)
+    footprint = footprint_raster(mesh, orientation, story, raster, params.footprint_closing_m)
+    outline = footprint.outline(params.floor_margin_m)
     boundary = list(lines)
     if outline is not None:
         boundary.extend(p.exterior for p in shapely.get_parts(outline))
     if not boundary:
         return []
     faces = shapely.get_parts(shapely.polygonize(shapely.get_parts(shapely.node(shapely.union_all(boundary)))))
-    front = _wall_probe_points(walls, index, +1.0)
-    behind = _wall_probe_points(walls, index, -1.0)
+    # A wall with the same face on both sides (one end free) is no edge of any face:
+    # polygonize drops it. Cut every face along the walls (a 0.1 mm slit), so that two rooms
+    # joined only around the free end of a wall by a strip narrower than a room come apart.
+    slits = wall_lines.buffer(1e-4, cap_style="flat", join_style="mitre") if wall_lines is not None else None
     tight = None
     out = []
     for face in faces:
         if face.area < params.min_room_area_m2:
             continue
-        for part in shapely.get_parts(_opening(face, params.min_room_width_m / 2)):
-            if not (isinstance(part, Polygon) and part.area >= params.min_room_area_m2):
-                continue
-            room = _classify(part, raster, wall_lines, front, behind, params)
+        if slits is not None:
+            face = face.difference(slits)
+        for part in _parts(face, params):
+            room = _classify(part, raster, wall_lines, params)
             if room is None:
                 continue
-            if room[1] == "floor":
-                # where no wall closes it, the room ends where its floor does (the outline used
-                # for the arrangement lies a margin outside), less strips narrower than a door
-                # (the floor of a doorway that leads outside)
-                if tight is None:
-                    tight = raster.outline(params.floor_closure_margin_m)
-                clipped = _opening(room[0].intersection(tight), params.door_width_m[1] / 2)
-                parts = [p for p in shapely.get_parts(clipped) if isinstance(p, Polygon)]
-                if parts:
-                    best = max(parts, key=lambda p: p.area)
-                    room = (shapely.orient_polygons(Polygon(best.exterior), exterior_cw=True), "floor")
-            out.append(room)
+            if room[1] == "walls":
+                out.append(room)
+                continue
+            # where no wall closes it, the room ends where the story's footprint does (the
+            # outline used for the arrangement lies a margin outside); what the footprint
+            # splits apart is as many rooms
+            if tight is None:
+                tight = footprint.outline(params.floor_closure_margin_m)
+            for piece in _parts(part.intersection(tight), params):
+                room = _classify(piece, raster, None, params)
+                if room is not None:
+                    out.append((shapely.orient_polygons(Polygon(piece.exterior), exterior_cw=True), "floor"))
     return out
+
+
+def _parts(shape, params: PlanParams) -> list[Polygon]:
+    """The parts of ``shape`` wide and large enough to be rooms."""
+    return [
+        p
+        for p in shapely.get_parts(_opening(shape, params.min_room_width_m / 2))
+        if isinstance(p, Polygon) and p.area >= params.min_room_area_m2
+    ]
 
 
 def _opening(shape, radius: float):
@@ -253,7 +288,7 @@ def _opening(shape, radius: float):
     return shape.buffer(-radius, join_style="mitre").buffer(radius, join_style="mitre", mitre_limit=2.0).intersection(shape)
 
 
-def _classify(face: Polygon, raster: FloorRaster, wall_lines, front: FloatArray, behind: FloatArray, params: PlanParams):
+def _classify(face: Polygon, raster: FloorRaster, wall_lines, params: PlanParams):
     """``(polygon, closed_by)`` when the face is a room, else ``None``."""
     xmin, zmin, xmax, zmax = face.bounds
     gx, gz = np.meshgrid(np.arange(xmin, xmax, 0.1) + 0.05, np.arange(zmin, zmax, 0.1) + 0.05)
@@ -261,10 +296,6 @@ def _classify(face: Polygon, raster: FloorRaster, wall_lines, front: FloatArray,
     inside = shapely.contains_xy(face, gx, gz)
     if inside.sum() == 0 or raster.lookup(gx[inside], gz[inside]).mean() < params.min_floor_fraction:
         return None
-    n_front = int(shapely.contains_xy(face, front[:, 0], front[:, 1]).sum()) if len(front) else 0
-    n_behind = int(shapely.contains_xy(face, behind[:, 0], behind[:, 1]).sum()) if len(behind) else 0
-    if n_behind > n_front:
-        return None  # behind walls: outside the building, or inside a thick wall
     closed_by = "floor"
     if wall_lines is not None:
         ring = face.exterior

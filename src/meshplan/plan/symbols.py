@@ -59,6 +59,7 @@ class PlanSymbols:
     windows: FloatArray = field(default_factory=lambda: np.zeros((0, 2, 2)))
     dimensions: tuple[Dimension, ...] = ()
     room_labels: tuple[Label, ...] = ()
+    room_outlines: tuple[FloatArray, ...] = ()  # closed rings [x, z] of the rooms
 
 
 def format_length(m: float, imperial: bool) -> str:
@@ -71,6 +72,16 @@ def format_length(m: float, imperial: bool) -> str:
 
 def format_area(m2: float, imperial: bool) -> str:
     return f"{m2 / FOOT_M**2:.1f} ft²" if imperial else f"{m2:.2f} m²"
+
+
+def _along_walls(a: FloatArray, b: FloatArray, wall_lines, tolerance_m: float = 0.05) -> bool:
+    """Whether the room edge ``a -> b`` runs along walls for most of its length: only those
+    are dimensioned (an edge closed by the floor's outline measures no wall)."""
+    if wall_lines is None:
+        return False
+    t = np.linspace(0.1, 0.9, 9)[:, None]
+    pts = shapely.points(a + t * (b - a))
+    return bool(np.mean(shapely.distance(pts, wall_lines) <= tolerance_m) >= 0.7)
 
 
 def plan_symbols(
@@ -113,7 +124,9 @@ def plan_symbols(
                 windows.append([p0 + back * f, p1 + back * f])
         jambs.append([p0, p0 + back])
         jambs.append([p1, p1 + back])
-    dims, labels = [], []
+    dims, labels, outlines = [], [], []
+    mine = np.flatnonzero(walls.story == story)
+    wall_lines = shapely.MultiLineString([[tuple(walls.start[i]), tuple(walls.end[i])] for i in mine]) if len(mine) else None
     for room in rooms:
         if room.story != story:
             continue
@@ -121,9 +134,10 @@ def plan_symbols(
         ring = np.asarray(shapely.orient_polygons(room.polygon.simplify(0.03)).exterior.coords)
         for a, b in zip(ring[:-1], ring[1:]):
             length = float(np.linalg.norm(b - a))
-            if length >= 0.5:
+            if length >= 0.5 and _along_walls(a, b, wall_lines):
                 dims.append(Dimension((float(a[0]), float(a[1])), (float(b[0]), float(b[1])), dimension_offset_m, format_length(length, imperial)))
+        outlines.append(np.asarray(room.polygon.exterior.coords))
         spot = polylabel(room.polygon, tolerance=0.05) if room.polygon.area > 0 else room.polygon.centroid
         labels.append(Label((float(spot.x), float(spot.y)), f"{room.label}\n{format_area(room.area, imperial)}"))
     as_array = lambda v: np.array(v, dtype=np.float64).reshape(-1, 2, 2)  # noqa: E731
-    return PlanSymbols(as_array(leaves), tuple(arcs), as_array(jambs), as_array(windows), tuple(dims), tuple(labels))
+    return PlanSymbols(as_array(leaves), tuple(arcs), as_array(jambs), as_array(windows), tuple(dims), tuple(labels), tuple(outlines))

@@ -13,6 +13,8 @@ from .sheet import Sheet, draw_annotations, draw_scale_bar, ink_rgba, new_figure
 
 WALL_COLOR = "#111111"
 DIM_COLOR = "#6a6a6a"
+ROOM_TINT = "#eef3f8"
+ROOM_EDGE = "#8aa0b8"
 #: Saturated colours for wall segments (no greys: grey marks the segments that were dropped).
 SEGMENT_COLORS = (
     "#e6194b", "#3cb44b", "#4363d8", "#f58231", "#911eb4", "#42d4f4", "#f032e6", "#9a6324",
@@ -67,6 +69,11 @@ def drafting_figure(
     fig, ax = new_figure(sheet, _story_title(f"Drafting (cut at {cut:.2f} m)", s.index, n_stories, s.floor, s.ceiling, params.imperial), params)
     ax.add_collection(LineCollection(plan.slices.segments, colors=WALL_COLOR, linewidths=1.6, capstyle="projecting", zorder=3))
     if symbols is not None:
+        # rooms as a light tint with a dashed edge: where no wall closes a room (a wall the scan
+        # missed), the dashes show where it was closed from the scanned floor
+        from matplotlib.collections import PolyCollection
+
+        ax.add_collection(PolyCollection(symbols.room_outlines, facecolors=ROOM_TINT, edgecolors=ROOM_EDGE, linewidths=0.4, linestyles=(0, (3, 2)), zorder=1))
         thin = dict(colors=WALL_COLOR, linewidths=0.5, zorder=3)
         ax.add_collection(LineCollection(symbols.jambs, **thin))
         ax.add_collection(LineCollection(symbols.windows, colors="#1f4e99", linewidths=0.6, zorder=3))

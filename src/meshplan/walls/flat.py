@@ -4,7 +4,8 @@ fitting, rectangle construction and mesh replacement.
 For each story and wall direction, the centroids of the triangles facing that way are clustered
 by :func:`~meshplan.walls.boxdbscan.box_dbscan` in wall coordinates (along the wall, across it,
 up). A cluster is a *wall segment*; it is kept when it is long enough and reaches near the floor
-and near the ceiling. Its plane faces the wall direction and passes through the area-weighted
+and near the ceiling (or, above the first story, continues a wall of the story below in the same
+plane: a double-height wall whose top the scanner did not reach). Its plane faces the wall direction and passes through the area-weighted
 median of the centroids across the wall; its rectangle spans the segment's triangles along the
 wall and in height. Coplanar rectangles of one direction separated by less than ``merge_gap_m``
 are one wall, so that a door or a missing strip does not split it (an addition to the paper).
@@ -217,6 +218,19 @@ def _merge(rows: list[dict], depth_half: float, gap: float) -> list[dict]:
     return rows
 
 
+def _continues(below: list[dict], direction: int, offset: FloatArray, u_lo: FloatArray, u_hi: FloatArray, params: WallParams) -> np.ndarray:
+    """Segments that continue, in the same plane, a wall of the story below reaching its
+    ceiling: the upper part of a double-height wall (a void, a stair well), whose top the
+    scanner rarely reached. They are walls although they stop short of this story's ceiling."""
+    out = np.zeros(len(offset), dtype=bool)
+    for r in below:
+        if r["direction"] != direction:
+            continue
+        overlap = np.minimum(u_hi, r["u_max"]) - np.maximum(u_lo, r["u_min"])
+        out |= (np.abs(offset - r["offset"]) <= params.box_depth_m / 2) & (overlap >= 0.5 * (u_hi - u_lo))
+    return out
+
+
 def find_flat_walls(mesh: Mesh, orientation: Orientation, params: WallParams | None = None) -> FlatWalls:
     """Flat walls of every story of an oriented mesh.
 
@@ -238,7 +252,9 @@ def find_flat_walls(mesh: Mesh, orientation: Orientation, params: WallParams | N
     seg_story: list[int] = []
     seg_kept: list[bool] = []
     rows: list[dict] = []
+    below: list[dict] = []  # walls of the story below that reach its ceiling
     for story in orientation.stories:
+        first = len(rows)
         in_story = (orientation.face_story == story.index) & (centroids[:, 1] > story.floor) & (centroids[:, 1] < story.ceiling)
         height = params.box_height_m or story.height
         half = np.array([params.box_length_m / 2, params.box_depth_m / 2, height / 2])
@@ -266,7 +282,7 @@ def find_flat_walls(mesh: Mesh, orientation: Orientation, params: WallParams | N
             keep = (
                 (u_hi - u_lo >= params.min_wall_length_m)
                 & (y_lo <= story.floor + params.floor_reach_m)
-                & (y_hi >= story.ceiling - params.ceiling_reach_m)
+                & ((y_hi >= story.ceiling - params.ceiling_reach_m) | _continues(below, d_index, offset, u_lo, u_hi, params))
             )
             seg_story.extend([story.index] * k)
             seg_kept.extend(keep.tolist())
@@ -286,6 +302,7 @@ def find_flat_walls(mesh: Mesh, orientation: Orientation, params: WallParams | N
                 for j in np.flatnonzero(keep)
             ]
             rows.extend(_merge(found, params.box_depth_m / 2, params.merge_gap_m))
+        below = [r for r in rows[first:] if r["top"] >= story.ceiling - params.ceiling_reach_m]
     rows.sort(key=lambda r: (r["story"], r["direction"], r["offset"], r["u_min"]))
     segment_wall = np.full(len(seg_story), -1, dtype=np.int64)
     for w, r in enumerate(rows):
