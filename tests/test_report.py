@@ -3,6 +3,7 @@ view, the plans, and placing an annotation by clicking the model, exported and r
 
 from __future__ import annotations
 
+import html
 import json
 import os
 import re
@@ -136,6 +137,32 @@ def test_large_scans_are_subsampled_by_whole_faces(room):
     # the full view says it shows everything
     full = view_meshes(result)
     assert not full.decimated and f"Showing {full.faces_shown:,} of {full.faces_total:,} faces" in report_html(result, _files(tmp / "out"))
+
+
+def test_model_without_ceiling_every_parameter_and_room_areas(room):
+    tmp, _, result = room
+    page = (tmp / "out" / "report.html").read_text(encoding="utf-8")
+    # the 3D view shows each story without its ceiling (but with its floor)
+    for sp in result.stories:
+        s = sp.story
+
+        def ceiling_faces(mesh) -> int:
+            c, n = mesh.face_centroids, mesh.face_normals
+            return int(np.count_nonzero((np.abs(c[:, 1] - s.ceiling) < 0.05) & (n[:, 1] < -0.9)))
+
+        assert ceiling_faces(result.mesh) > 100  # the scan has a ceiling
+        (layer,) = [v for v in view_meshes(result).layers if v.role == "scan" and v.story == s.index]
+        assert ceiling_faces(layer.mesh) == 0
+        assert np.count_nonzero((np.abs(layer.mesh.face_centroids[:, 1] - s.floor) < 0.05) & (layer.mesh.face_normals[:, 1] > 0.9)) > 100
+    # every parameter used, with its value
+    table = re.search(r'<table id="parameters".*?</table>', page, re.S).group(0)
+    for group, params in result.options.to_dict().items():
+        for name, value in params.items():
+            assert f"<td>{group}</td><td>{name}</td><td>{html.escape(json.dumps(value, sort_keys=True))}</td>" in table, name
+    # the rooms of each story with their areas
+    for r in json.loads((tmp / "out" / "plan.json").read_text()).get("rooms") or []:
+        rooms = re.search(rf'<table id="rooms-{r["story"]}".*?</table>', page, re.S).group(0)
+        assert f"<td>{html.escape(r['label'])}</td><td>{r['area']:,.2f}</td>" in rooms
 
 
 # --------------------------------------------------------------------------------------------
@@ -280,6 +307,36 @@ def test_report_in_chromium_click_to_annotate_round_trip(room, browser):
     assert np.linalg.norm(position - target) < 0.02
     assert _distance_to_surface(result.mesh, position) < 0.01
     assert again.annotations.directions[k] @ [0.0, 1.0, 0.0] > 0.95
+
+
+@pytest.mark.browser
+def test_model_rotates_and_zooms_with_the_mouse(room, browser):
+    tmp, _, _ = room
+    pg = _Page(browser, (tmp / "out" / "report.html").as_uri())
+    page = pg.page
+    eye = "(() => { const e = document.getElementById('model3d')._fullLayout.scene._scene.getCamera().eye; return [e.x, e.y, e.z]; })()"
+    try:
+        box = page.locator("#model3d").bounding_box()
+        x, y = box["x"] + box["width"] / 2, box["y"] + box["height"] / 2
+        before = np.array(page.evaluate(eye))
+        page.mouse.move(x, y)
+        page.mouse.down()
+        page.mouse.move(x + 180, y + 40, steps=12)
+        page.mouse.up()
+        page.wait_for_timeout(300)
+        turned = np.array(page.evaluate(eye))
+        assert np.linalg.norm(turned - before) > 0.1, "dragging did not rotate the model"
+        assert abs(np.linalg.norm(turned) - np.linalg.norm(before)) < 0.05 * np.linalg.norm(before)  # a turn, not a zoom
+        page.mouse.move(x, y)
+        for _ in range(5):
+            page.mouse.wheel(0, -200)
+            page.wait_for_timeout(50)
+        page.wait_for_timeout(300)
+        zoomed = np.array(page.evaluate(eye))
+        assert np.linalg.norm(zoomed) < 0.9 * np.linalg.norm(turned), "the wheel did not zoom in"
+        assert pg.errors == [] and pg.external_requests() == []
+    finally:
+        pg.close()
 
 
 @pytest.mark.browser

@@ -658,14 +658,15 @@ def _dask_client(address: str) -> Any:
 
 def _run_dask(
     tasks: Sequence[tuple],
-    address: str,
+    client: Any,
     func: Callable[..., dict[str, Any]],
     on_done: Callable[[int, dict[str, Any]], None],
     names: Sequence[str],
 ) -> None:
+    """Run ``func(*task)`` for every task on the cluster of ``client`` (closed at the end);
+    ``on_done(index, outcome)`` is called in this process as each finishes."""
     import distributed
 
-    client = _dask_client(address)
     with client:
         batch_id = uuid.uuid4().hex[:8]
         futures = {
@@ -673,7 +674,8 @@ def _run_dask(
             for i, task in enumerate(tasks)
         }
         try:
-            for fut in distributed.as_completed(list(futures)):
+            # this client is not the default one (set_as_default=False): give its loop
+            for fut in distributed.as_completed(list(futures), loop=client.loop):
                 i = futures[fut]
                 try:
                     outcome = fut.result()
@@ -782,7 +784,14 @@ def run_batch(
         params.setdefault("processes", 1)  # parallel across scans, not within one (module docstring)
     options = RunOptions.from_kwargs(**params)  # a bad option fails the batch, not every scan
     jobs = _jobs(inputs, out)
-    _prepare_output(out)
+    # connect before writing anything: a batch refused for want of a cluster leaves no trace
+    client = _dask_client(scheduler) if scheduler is not None else None
+    try:
+        _prepare_output(out)
+    except BaseException:
+        if client is not None:
+            client.close()
+        raise
     names = output_names([scan for scan, _ in jobs])
     tasks = [
         (os.path.abspath(scan), os.path.abspath(ann) if ann is not None else None, os.path.abspath(out / name), options, force)
@@ -815,7 +824,7 @@ def run_batch(
         progress(0, len(jobs), None)
     try:
         if scheduler is not None:
-            _run_dask(tasks, scheduler, process_scan, on_done, names)
+            _run_dask(tasks, client, process_scan, on_done, names)
         elif workers == 1 or len(tasks) == 1:
             for i, task in enumerate(tasks):
                 on_done(i, process_scan(*task))
@@ -851,6 +860,7 @@ class BatchProgress:
         self.enabled = enabled and sys.stderr.isatty()
         self._progress: Any = None
         self._task: Any = None
+        self._stack = contextlib.ExitStack()
 
     def __enter__(self) -> BatchProgress:
         if self.enabled:
@@ -861,12 +871,14 @@ class BatchProgress:
                 TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(), TimeRemainingColumn(),
                 console=Console(stderr=True), refresh_per_second=4,  # keep the parent's CPU for the workers
             )
-            self._progress.__enter__()
+            from .progress import logs_above_live_display
+
+            self._stack.enter_context(self._progress)
+            self._stack.enter_context(logs_above_live_display())  # log lines above the bar, not through it
         return self
 
     def __exit__(self, *exc: Any) -> None:
-        if self._progress is not None:
-            self._progress.__exit__(*exc)
+        self._stack.__exit__(*exc)
 
     def update(self, done: int, total: int, row: ScanRow | None) -> None:
         if self._progress is None:

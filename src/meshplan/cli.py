@@ -97,12 +97,12 @@ def _parse_set(items: list[str]) -> dict[str, Any]:
 
 
 def _setup_logging(verbose: int, quiet: bool) -> None:
-    level = logging.WARNING
-    if verbose >= 1:
-        level = logging.DEBUG
-    if quiet:
-        level = logging.ERROR
+    """Warnings and errors on stderr; ``-v`` adds meshplan's debug records, ``-vv`` every
+    library's (matplotlib, trimesh, ... are too chatty for ``-v``); ``--quiet`` only errors."""
+    level = logging.ERROR if quiet else logging.DEBUG if verbose >= 2 else logging.WARNING
     logging.basicConfig(level=level, format="%(levelname)s %(name)s: %(message)s", stream=sys.stderr, force=True)
+    # reset on every call: main() may run several commands in one process
+    logging.getLogger("meshplan").setLevel(logging.DEBUG if verbose and not quiet else logging.NOTSET)
 
 
 @app.command()
@@ -135,7 +135,7 @@ def run(
     set_: list[str] = typer.Option([], "--set", help="Any other parameter, NAME=VALUE (see plan.json 'parameters')."),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="Print nothing but errors."),
     as_json: bool = typer.Option(False, "--json", help="Print the summary as JSON on stdout."),
-    verbose: int = typer.Option(0, "--verbose", "-v", count=True, help="Debug logging."),
+    verbose: int = typer.Option(0, "--verbose", "-v", count=True, help="Debug logging (-vv: also the libraries')."),
 ) -> None:
     """Orient a scan, split it into stories and draw its floor plans."""
     from .pipeline import default_output_dir

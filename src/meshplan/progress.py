@@ -2,8 +2,11 @@
 
 from __future__ import annotations
 
+import contextlib
+import logging
 import sys
-from typing import TYPE_CHECKING
+from collections.abc import Iterator
+from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:  # pragma: no cover
     from .pipeline import Result
@@ -18,13 +21,36 @@ STAGE_NAMES = {
 }
 
 
+@contextlib.contextmanager
+def logs_above_live_display() -> Iterator[None]:
+    """While a rich live display redirects ``sys.stderr``, send the logging handlers that write
+    to the real stderr through that redirection too, so that their lines (``-v``) print above
+    the display instead of tearing it apart. Does nothing when stderr is not redirected."""
+    from rich.file_proxy import FileProxy
+
+    proxy: Any = sys.stderr
+    if not isinstance(proxy, FileProxy):
+        yield
+        return
+    real = proxy.rich_proxied_file
+    moved = [h for h in logging.getLogger().handlers if isinstance(h, logging.StreamHandler) and h.stream is real]
+    for h in moved:
+        h.setStream(proxy)  # type: ignore[arg-type]
+    try:
+        yield
+    finally:
+        for h in moved:
+            h.setStream(real)  # flushes what the proxy still holds, while the display is live
+
+
 class StageProgress:
     """A spinner per pipeline stage; does nothing when disabled or not on a terminal."""
 
     def __init__(self, enabled: bool = True) -> None:
         self.enabled = enabled and sys.stderr.isatty()
-        self._progress = None
+        self._progress: Any = None
         self._tasks: dict[str, int] = {}
+        self._stack = contextlib.ExitStack()
 
     def __enter__(self) -> StageProgress:
         if self.enabled:
@@ -34,12 +60,12 @@ class StageProgress:
             self._progress = Progress(
                 SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=Console(stderr=True), transient=False
             )
-            self._progress.__enter__()
+            self._stack.enter_context(self._progress)
+            self._stack.enter_context(logs_above_live_display())
         return self
 
-    def __exit__(self, *exc) -> None:
-        if self._progress is not None:
-            self._progress.__exit__(*exc)
+    def __exit__(self, *exc: Any) -> None:
+        self._stack.__exit__(*exc)
 
     def update(self, stage: str, event: str) -> None:
         if self._progress is None:
