@@ -7,6 +7,31 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import settings
+
+# Property and fuzz tests (hypothesis) draw the same cases on every run, so that CI is
+# reproducible, and keep no example database; HYPOTHESIS_PROFILE=explore draws new cases.
+settings.register_profile("ci", derandomize=True, database=None, deadline=None, print_blob=True)
+settings.register_profile("explore", deadline=None)
+settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
+
+
+def pytest_configure(config):
+    config.addinivalue_line("markers", "hypothesis_cases(n): a hypothesis test that must run at least n generated cases")
+
+
+def pytest_terminal_summary(terminalreporter):
+    """Report how many cases the hypothesis tests ran (recorded by tests/test_properties.py,
+    also across pytest-xdist workers)."""
+    counts = {}
+    for reports in terminalreporter.stats.values():
+        for report in reports:
+            for name, value in getattr(report, "user_properties", ()):
+                if name == "hypothesis_cases":
+                    counts[report.nodeid] = value
+    if counts:
+        terminalreporter.write_line(f"hypothesis: {sum(counts.values())} generated cases in {len(counts)} property and fuzz tests")
+
 
 ROOT = Path(__file__).resolve().parents[1]
 SHARED = Path(os.environ.get("MESHPLAN_SHARED", ROOT.parent / "shared"))

@@ -101,6 +101,14 @@ def test_bad_faces_are_dropped_and_counted(tmp_path):
         ("garbage.ply", bytes(range(256)) * 10, "cannot be read as PLY"),
         ("points.ply", b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nend_header\n0 0 0\n1 0 0\n0 1 0\n", "point cloud"),
         ("degenerate.obj", b"v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n", "none of its 1 faces is usable"),
+        ("binary.obj", bytes(range(256)) * 10, "holds binary data, not OBJ text"),
+        ("binary.off", b"OFF\n\x00\x01\x02" * 100, "holds binary data, not OFF text"),
+        ("latin1.obj", "# caf\u00e9\n".encode("latin-1") + b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "it is not UTF-8 text"),
+        ("broken.gltf", b'{"asset": ', "not a glTF file: not valid JSON"),
+        ("cut.stl", bytes(80) + (1000).to_bytes(4, "little") + bytes(50 * 10), "declares 1,000 triangles, which need 50,084 bytes, but the file has 584"),
+        ("lying.ply", b"ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+         b"element face 5\nproperty list uchar int vertex_indices\nend_header\n" + bytes(36 + 13), "declares 3 vertices and 5 faces, which need at least 101 bytes, but only 49"),
+        ("lying_ascii.ply", b"ply\nformat ascii 1.0\nelement vertex 300\nproperty float x\nproperty float y\nproperty float z\nend_header\n0 0 0\n", "cut short or a wrong header"),
     ],
 )
 def test_bad_files_give_clear_errors(tmp_path, name, content, message):
@@ -122,6 +130,97 @@ def test_max_faces_is_checked_before_loading(tmp_path, room):
     path.write_bytes(trimesh.Trimesh(room.vertices, room.faces, process=False).export(file_type="ply"))
     with pytest.raises(InputError, match=r"--max-faces"):
         load_mesh(path, max_faces=100)
+
+
+@pytest.mark.parametrize("fmt", ["ply", "stl", "obj", "off", "glb"])
+def test_a_mesh_too_large_for_memory_is_refused_up_front(tmp_path, room, fmt, monkeypatch):
+    """The estimated need is stated, with --max-faces to override; the file is never read."""
+    from meshplan.io import mesh as mesh_io
+
+    path = tmp_path / f"room.{fmt}"
+    data = trimesh.Trimesh(room.vertices, room.faces, process=False).export(file_type=fmt)
+    path.write_bytes(data if isinstance(data, bytes) else data.encode())
+    monkeypatch.setattr(mesh_io, "available_memory_bytes", lambda: 50_000)  # 50 kB "free"
+    monkeypatch.setattr(mesh_io, "_read_with_trimesh", lambda *a: pytest.fail("read a file that cannot fit"))
+    with pytest.raises(InputError) as info:
+        load_mesh(path)
+    faces = mesh_io.estimate_faces(path, fmt) or path.stat().st_size // 20
+    assert faces >= room.n_faces
+    assert info.value.message == (
+        f"{path}: about {faces:,} faces would need about {faces * mesh_io.BYTES_PER_FACE / 1e9:.1f} GB of memory "
+        f"and 0.0 GB are available; decimate the scan, or pass --max-faces {faces} to try anyway"
+    )
+    monkeypatch.undo()
+    assert load_mesh(path, max_faces=faces).mesh.n_faces == room.n_faces  # the override works
+
+
+# --------------------------------------------------------------------------------------------
+# atomic output
+
+
+def test_staged_directory_swaps_results_in_one_step(tmp_path):
+    from meshplan.io import staged_directory
+    from meshplan.io.atomic import _exchange
+
+    a, b = tmp_path / "a", tmp_path / "b"
+    a.mkdir()
+    b.mkdir()
+    (a / "x").write_text("a")
+    if not _exchange(a, b):
+        pytest.skip("this filesystem cannot exchange two paths atomically (two renames are used)")
+    assert (b / "x").read_text() == "a" and not (a / "x").exists()
+    out = tmp_path / "out"
+    for text in ("first", "second"):
+        with staged_directory(out, force=True) as tmp:
+            assert tmp.parent == tmp_path and tmp.name.startswith(".out.meshplan-tmp-")
+            (tmp / "plan.json").write_text(text)
+        assert (out / "plan.json").read_text() == text
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a", "b", "out"]
+
+
+def test_staged_directory_failures_leave_nothing(tmp_path):
+    """A failure while writing: an OutputError in one line, no staged directory and none of the
+    parents it created, the previous result untouched."""
+    import errno
+
+    from meshplan.errors import OutputError
+    from meshplan.io import staged_directory
+
+    target = tmp_path / "new" / "deeper" / "out"
+    with pytest.raises(OutputError) as info:
+        with staged_directory(target) as tmp:
+            (tmp / "a.png").write_bytes(b"x")
+            raise OSError(errno.ENOSPC, "No space left on device", str(tmp / "b.png"))
+    assert info.value.message == (
+        f"{target}: writing b.png failed (No space left on device) and nothing was changed; "
+        "free some space or choose another output directory with -o"
+    )
+    assert list(tmp_path.iterdir()) == []
+    previous = tmp_path / "previous"
+    previous.mkdir()
+    (previous / "plan.json").write_text("old")
+    with pytest.raises(RuntimeError):
+        with staged_directory(previous, force=True) as tmp:
+            (tmp / "plan.json").write_text("new")
+            raise RuntimeError("a bug while writing")
+    assert [p.name for p in tmp_path.iterdir()] == ["previous"] and (previous / "plan.json").read_text() == "old"
+
+
+def test_leftovers_of_a_killed_run_are_cleaned_up(tmp_path):
+    """A run killed between the two renames (where the system cannot swap atomically) left the
+    previous result under a hidden name: the next run puts it back; staged leftovers go."""
+    from meshplan.io.atomic import _OLD_TAG, _TMP_TAG, remove_stale
+
+    dead = 2**22 + 12345  # above the default pid_max: no such process
+    old = tmp_path / f".out{_OLD_TAG}{dead}-abc"
+    old.mkdir()
+    (old / "plan.json").write_text("old")
+    staged = tmp_path / f".out{_TMP_TAG}{dead}-def"
+    staged.mkdir()
+    (staged / "half.png").write_bytes(b"\x89PNG")
+    remove_stale(tmp_path / "out")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]
+    assert (tmp_path / "out" / "plan.json").read_text() == "old"
 
 
 # --------------------------------------------------------------------------------------------

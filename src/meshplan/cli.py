@@ -2,7 +2,8 @@
 
 Every user error is printed as one line, ``error: <problem>; <what to do>``, with exit status 2
 and no traceback. Progress goes to stderr (``--quiet`` silences it); ``--json`` prints the
-summary as JSON on stdout.
+summary as JSON on stdout. Running out of memory is reported the same way; any other exception is
+a bug in meshplan, reported in one line with exit status 1 (the traceback with ``-v``).
 """
 
 from __future__ import annotations
@@ -316,7 +317,7 @@ def _usage_error_types() -> tuple[type[BaseException], ...]:
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``meshplan`` console script; returns the exit status."""
     try:
-        app(args=argv, prog_name="meshplan", standalone_mode=False)
+        status = app(args=argv, prog_name="meshplan", standalone_mode=False)
     except MeshplanError as exc:
         click.echo(f"error: {exc.message}", err=True)
         return exc.exit_code
@@ -336,7 +337,23 @@ def main(argv: list[str] | None = None) -> int:
         cmd = ctx.command_path if ctx is not None else "meshplan"
         click.echo(f"error: {message}; see '{cmd} --help'", err=True)
         return 2
-    return 0
+    except MemoryError:
+        # the up-front estimate (io.mesh.BYTES_PER_FACE) was too low, or --max-faces overrode it
+        click.echo("error: ran out of memory while processing the scan; decimate the scan or free memory, "
+                   "and leave --max-faces unset so that such scans are refused up front", err=True)
+        return 2
+    except Exception as exc:  # a bug in meshplan: still one line; the traceback with -v
+        if logging.getLogger("meshplan").isEnabledFor(logging.DEBUG):
+            import traceback
+
+            traceback.print_exc()
+        detail = " ".join(str(exc).split())[:200]
+        click.echo(f"error: internal error ({type(exc).__name__}{': ' + detail if detail else ''}); "
+                   "please report this bug in meshplan with the scan and the command (add -v for the traceback)", err=True)
+        return 1
+    if status == 130:  # typer turns Ctrl-C into Exit(130), which it returns outside standalone mode
+        click.echo("error: interrupted; nothing was written", err=True)
+    return status if isinstance(status, int) else 0
 
 
 if __name__ == "__main__":  # pragma: no cover

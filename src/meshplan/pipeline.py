@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from .errors import GeometryError
 from .geometry import Annotations, Mesh
 from .io import LoadStats, load_annotations, load_mesh
 from .options import RunOptions
@@ -118,6 +119,34 @@ class Result:
         }
 
 
+#: Share of the area-weighted normals along one direction above which a scan holds no room.
+FLAT_SHARE = 0.98
+
+
+def check_not_flat(mesh: Mesh) -> None:
+    """Refuse a scan whose faces are all parallel: one wall, or floors and ceilings alone.
+
+    Such a scan holds no room; orienting it would take the one surface for the floor and
+    report, misleadingly, that there are no walls.
+
+    Raises
+    ------
+    GeometryError
+        When at least :data:`FLAT_SHARE` of the area faces one way (either sign).
+    """
+    areas, normals = mesh.face_areas, mesh.face_normals
+    total = float(areas.sum())
+    if not (np.isfinite(total) and total > 0):
+        return
+    tensor = np.einsum("i,ij,ik->jk", areas, normals, normals) / total
+    if np.all(np.isfinite(tensor)) and np.linalg.eigvalsh(tensor)[-1] >= FLAT_SHARE:
+        raise GeometryError(
+            f"the scan holds no room: all its {mesh.n_faces:,} faces are parallel "
+            "(a single wall or floor, or floors and ceilings without walls)",
+            "scan the whole room, with its floor and its walls",
+        )
+
+
 class _Timer:
     def __init__(self, progress: Progress | None) -> None:
         self.timings: dict[str, float] = {}
@@ -147,6 +176,7 @@ def compute(
     """Run every computing stage on an already loaded mesh (input coordinates, metres)."""
     timer = timer or _Timer(None)
     with timer.stage("orient"):
+        check_not_flat(mesh)
         orientation = orient(mesh, options.orient)
         plan_mesh = mesh.transformed(orientation.transform).with_flipped(orientation.flipped)
         plan_annotations = annotations.transformed(orientation.transform)

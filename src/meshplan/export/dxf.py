@@ -94,6 +94,13 @@ def drafting_dxf(
     return _reproducible_bytes(doc)
 
 
+def _required_class_names(dxfversion: str) -> set[str]:
+    """The CLASS names ezdxf always writes for ``dxfversion`` (in its own, fixed order)."""
+    from ezdxf.sections.classes import REQ_R2004, REQUIRED_CLASSES
+
+    return set(REQUIRED_CLASSES.get(dxfversion, REQ_R2004))
+
+
 def _reproducible_bytes(doc) -> bytes:
     """The DXF text without the dates and random GUIDs ezdxf writes, so that the same plan gives
     the same file."""
@@ -105,6 +112,12 @@ def _reproducible_bytes(doc) -> bytes:
     meta[CREATED_BY_EZDXF] = f"ezdxf {ezdxf.__version__} for meshplan"
     meta[WRITTEN_BY_EZDXF] = f"ezdxf {ezdxf.__version__} for meshplan"
     doc._update_ezdxf_metadata = lambda: None  # it would stamp the current time
+    # ezdxf adds a CLASS for each entity type in use while writing, iterating over a set: its
+    # order changes with the hash seed. Add them now, in a fixed order (writing adds no more).
+    classes = doc.classes
+    classes.add_required_classes(doc.dxfversion)
+    fixed = [key for key in classes.classes if key[0] in _required_class_names(doc.dxfversion)]
+    classes.classes = {key: classes.classes[key] for key in fixed + sorted(set(classes.classes) - set(fixed))}
     saved = ezdxf.options.write_fixed_meta_data_for_testing
     ezdxf.options.write_fixed_meta_data_for_testing = True
     try:

@@ -55,4 +55,17 @@ def glb_bytes(mesh: Mesh, annotations: Annotations | None = None, name: str = "s
         scene.add_geometry(_trimesh(mesh, rgba), node_name=name, geom_name=name)
     for marker_name, marker in annotation_markers(annotations or Annotations()):
         scene.add_geometry(marker, node_name=marker_name, geom_name=marker_name)
+    if not scene.geometry:  # e.g. the flat walls of a story where none was found
+        return empty_glb()
     return scene.export(file_type="glb")
+
+
+def empty_glb() -> bytes:
+    """A valid GLB holding one empty scene (trimesh refuses to export one)."""
+    import json
+    import struct
+
+    doc = json.dumps({"asset": {"version": "2.0", "generator": "meshplan"}, "scene": 0, "scenes": [{"nodes": []}]}, separators=(",", ":"))
+    chunk = doc.encode("ascii")
+    chunk += b" " * (-len(chunk) % 4)  # chunks are 4-byte aligned, JSON padded with spaces
+    return struct.pack("<4sII", b"glTF", 2, 12 + 8 + len(chunk)) + struct.pack("<I4s", len(chunk), b"JSON") + chunk

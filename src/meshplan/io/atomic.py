@@ -3,14 +3,18 @@
 Single files go to a temporary name in the same directory and are renamed into place
 (``os.replace`` is atomic on POSIX and Windows). A result directory is built completely under a
 hidden temporary name beside its destination and renamed into place only when every file is in
-it; an existing result is replaced only on request. A run killed at any moment therefore leaves
-either the complete previous result or none, never a mixture; hidden leftovers of a killed run are
-removed by the next run that writes to the same place.
+it; an existing result is replaced only on request, by swapping the two directories in one step
+(Linux ``renameat2(RENAME_EXCHANGE)``; elsewhere two renames, undone by the next run if it is
+killed between them). A run killed at any moment therefore leaves either the complete previous
+result or none, never a mixture; hidden leftovers of a killed run are removed by the next run
+that writes to the same place.
 """
 
 from __future__ import annotations
 
 import contextlib
+import ctypes
+import errno
 import os
 import shutil
 import tempfile
@@ -85,13 +89,80 @@ def check_output_dir(target: str | os.PathLike, force: bool) -> Path:
         raise OutputError(f"{t}: exists and is not a directory", "choose another output path with -o")
     if t.exists() and not force:
         raise OutputError(f"{t}: output directory already exists", "pass --force to replace it, or choose another with -o")
-    parent = t.parent if str(t.parent) else Path(".")
-    probe = parent
-    while not probe.exists():
+    probe = t.parent if str(t.parent) else Path(".")
+    while not probe.exists() and probe != probe.parent:
         probe = probe.parent
-    if not probe.is_dir() or not os.access(probe, os.W_OK | os.X_OK):
-        raise OutputError(f"{t}: cannot write in {probe}", "choose a writable output directory with -o")
+    if not probe.is_dir():
+        raise OutputError(f"{t}: cannot write there: {probe} is a file, not a directory", "choose another output path with -o")
+    # really create something: permission bits say nothing for root, read-only mounts or /proc
+    try:
+        os.rmdir(tempfile.mkdtemp(prefix=".meshplan-probe-", dir=probe))
+    except OSError as exc:
+        raise OutputError(
+            f"{t}: cannot write in {probe} ({exc.strerror or exc})", "choose a writable output directory with -o"
+        ) from None
     return t
+
+
+_RENAME_EXCHANGE = 2
+_AT_FDCWD = -100
+
+
+def _exchange(a: Path, b: Path) -> bool:
+    """Swap two existing paths in one atomic step; ``False`` where the system cannot.
+
+    Uses Linux's ``renameat2(RENAME_EXCHANGE)`` (glibc 2.28 or later; most local filesystems).
+    """
+    try:
+        renameat2 = ctypes.CDLL(None, use_errno=True).renameat2
+    except (AttributeError, OSError):
+        return False
+    renameat2.argtypes = [ctypes.c_int, ctypes.c_char_p, ctypes.c_int, ctypes.c_char_p, ctypes.c_uint]
+    if renameat2(_AT_FDCWD, os.fsencode(a), _AT_FDCWD, os.fsencode(b), _RENAME_EXCHANGE) == 0:
+        return True
+    code = ctypes.get_errno()
+    if code in (errno.EINVAL, errno.ENOSYS, errno.ENOTSUP, errno.EOPNOTSUPP, errno.EXDEV):
+        return False
+    raise OSError(code, os.strerror(code), str(b))
+
+
+def _publish(tmp: Path, target: Path, force: bool) -> None:
+    """Move the complete staged directory ``tmp`` to ``target``, replacing it when ``force``."""
+    if not target.exists():
+        os.replace(tmp, target)
+        return
+    if not force:
+        raise OutputError(f"{target}: output directory already exists", "pass --force to replace it")
+    if _exchange(tmp, target):
+        shutil.rmtree(tmp, ignore_errors=True)  # now the previous result
+        return
+    # two renames: a run killed between them leaves the previous result under the hidden
+    # name, and remove_stale() puts it back
+    old = Path(tempfile.mkdtemp(prefix=f".{target.name}{_OLD_TAG}{os.getpid()}-", dir=target.parent))
+    os.replace(target, old)
+    os.replace(tmp, target)
+    shutil.rmtree(old, ignore_errors=True)
+
+
+def _make_parents(directory: Path, created: list[Path]) -> None:
+    """Create ``directory`` and its missing parents, inserting each created one at the front
+    of ``created`` (so that it lists them deepest first, even when a mkdir fails)."""
+    missing = []
+    while not directory.exists() and directory != directory.parent:
+        missing.append(directory)
+        directory = directory.parent
+    for d in reversed(missing):
+        d.mkdir()
+        created.insert(0, d)
+
+
+def _remove_created(created: list[Path]) -> None:
+    """Remove the directories :func:`_make_parents` created, if they are still empty."""
+    for d in created:
+        try:
+            d.rmdir()
+        except OSError:
+            break
 
 
 @contextlib.contextmanager
@@ -101,27 +172,26 @@ def staged_directory(target: str | os.PathLike, force: bool = False) -> Iterator
     On any exception the staged directory is deleted and ``target`` is left as it was.
     """
     t = check_output_dir(target, force)
+    created: list[Path] = []
     try:
-        t.parent.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise OutputError(f"{t.parent}: cannot be created ({exc.strerror})", "choose a writable output directory with -o") from None
-    remove_stale(t)
-    try:
+        _make_parents(t.parent, created)
+        remove_stale(t)
         tmp = Path(tempfile.mkdtemp(prefix=f".{t.name}{_TMP_TAG}{os.getpid()}-", dir=t.parent))
     except OSError as exc:
-        raise OutputError(f"{t.parent}: cannot be written ({exc.strerror})", "choose a writable output directory with -o") from None
+        _remove_created(created)
+        raise OutputError(f"{t.parent}: cannot be written ({exc.strerror or exc})", "choose a writable output directory with -o") from None
     try:
-        yield tmp
-        os.chmod(tmp, 0o755)
-        if t.exists():
-            if not force:
-                raise OutputError(f"{t}: output directory already exists", "pass --force to replace it")
-            old = Path(tempfile.mkdtemp(prefix=f".{t.name}{_OLD_TAG}{os.getpid()}-", dir=t.parent))
-            os.replace(t, old)
-            os.replace(tmp, t)
-            shutil.rmtree(old, ignore_errors=True)
-        else:
-            os.replace(tmp, t)
+        try:
+            yield tmp
+            os.chmod(tmp, 0o755)
+            _publish(tmp, t, force)
+        except OSError as exc:  # a full disk, a quota, a directory removed under our feet
+            what = f" {Path(exc.filename).name}" if exc.filename else ""
+            raise OutputError(
+                f"{t}: writing{what} failed ({exc.strerror or exc}) and nothing was changed",
+                "free some space or choose another output directory with -o",
+            ) from None
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
+        _remove_created(created)
         raise

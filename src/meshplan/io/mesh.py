@@ -158,8 +158,108 @@ def available_memory_bytes() -> int | None:
         return None
 
 
+#: Bytes of each PLY scalar type.
+_PLY_TYPE_BYTES = {
+    "char": 1, "uchar": 1, "int8": 1, "uint8": 1, "short": 2, "ushort": 2, "int16": 2, "uint16": 2,
+    "int": 4, "uint": 4, "int32": 4, "uint32": 4, "float": 4, "float32": 4, "double": 8, "float64": 8,
+}
+
+
+def _ply_data_needs(head: bytes) -> tuple[dict[str, int], int, int] | None:
+    """Element counts, header length and the fewest data bytes a PLY header implies.
+
+    Lower bounds: a binary scalar takes its size, an ASCII one at least two bytes (a digit and
+    a separator); a face's vertex list holds at least three indices. ``None`` when ``head`` is
+    not a complete, well-formed PLY header (trimesh then reports what is wrong).
+    """
+    end = head.find(b"end_header")
+    if not head.startswith(b"ply") or end < 0:
+        return None
+    stop = head.find(b"\n", end)
+    if stop < 0:
+        return None
+    try:
+        lines = head[:end].decode("ascii").splitlines()
+        fmt = next(ln.split()[1] for ln in lines if ln.startswith("format "))
+        ascii_ = fmt == "ascii"
+        counts: dict[str, int] = {}
+        need, element, per_item = 0, None, 0
+        for ln in lines:
+            parts = ln.split()
+            if parts[:1] == ["element"]:
+                if element is not None:
+                    need += counts[element] * per_item
+                element, per_item = parts[1], 0
+                counts[element] = int(parts[2])
+                if counts[element] < 0:
+                    return None
+            elif parts[:1] == ["property"] and element is not None:
+                items = 3 if element == "face" and parts[-1] in ("vertex_indices", "vertex_index") else 0
+                if parts[1] == "list":
+                    per_item += 2 * (1 + items) if ascii_ else _PLY_TYPE_BYTES[parts[2]] + items * _PLY_TYPE_BYTES[parts[3]]
+                else:
+                    per_item += 2 if ascii_ else _PLY_TYPE_BYTES[parts[1]]
+        if element is not None:
+            need += counts[element] * per_item
+    except (ValueError, IndexError, KeyError, StopIteration, UnicodeDecodeError):
+        return None
+    return counts, stop + 1, need
+
+
+def check_header(path: Path, file_type: str) -> None:
+    """Refuse a PLY or binary STL whose header declares more data than the file holds.
+
+    Such a file was cut short, or its header lies; saying so is clearer than the reader's
+    error, and it keeps the memory check from trusting an absurd face count.
+    """
+    size = path.stat().st_size
+    with open(path, "rb") as fh:
+        head = fh.read(65536)
+    if file_type == "ply":
+        found = _ply_data_needs(head)
+        if found is None:
+            return
+        counts, header_len, need = found
+        if size - header_len < need:
+            raise InputError(
+                f"{path}: cut short or a wrong header: the PLY header declares {counts.get('vertex', 0):,} vertices "
+                f"and {counts.get('face', 0):,} faces, which need at least {need:,} bytes, "
+                f"but only {size - header_len:,} follow it",
+                "export or copy the scan again",
+            )
+    elif file_type == "stl" and len(head) >= 84 and not head[:5].lower().startswith(b"solid"):
+        n = struct.unpack("<I", head[80:84])[0]
+        if size < 84 + 50 * n:
+            raise InputError(
+                f"{path}: damaged or cut short: its binary STL header declares {n:,} triangles, which need "
+                f"{84 + 50 * n:,} bytes, but the file has {size:,}",
+                "export or copy the scan again",
+            )
+
+
+#: Bytes that text files do not hold (tab, newlines, vertical tab, form feed are allowed).
+_CONTROL_BYTES = bytes([*range(0, 9), *range(14, 32)])
+
+
+def _check_text(path: Path, file_type: str) -> None:
+    """OBJ and OFF are text: refuse binary data (a renamed or corrupted file) up front."""
+    with open(path, "rb") as fh:
+        head = fh.read(65536)
+    control = len(head) - len(head.translate(None, _CONTROL_BYTES))
+    if control > 0.01 * len(head):
+        raise InputError(
+            f"{path}: holds binary data, not {file_type.upper()} text",
+            f"check that the file really is an {file_type.upper()} export (not another format renamed), or export the scan again",
+        )
+
+
 def check_size(path: Path, file_type: str, max_faces: int | None) -> int:
-    """Refuse, before loading, a mesh that cannot fit in memory (or exceeds ``max_faces``)."""
+    """Refuse, before loading, a mesh that cannot fit in memory (or exceeds ``max_faces``).
+
+    The estimated need (:data:`BYTES_PER_FACE` per face declared in the header, or estimated
+    from the size of an OBJ) is stated in the message, with ``--max-faces`` to override.
+    """
+    check_header(path, file_type)
     faces = estimate_faces(path, file_type)
     if faces is None:
         # OBJ and glTF: a face line or index triple takes at least ~20 bytes
@@ -208,6 +308,16 @@ def _check_obj_ending(path: Path) -> None:
 def _read_with_trimesh(path: Path, file_type: str) -> tuple[np.ndarray, np.ndarray, int]:
     import trimesh
 
+    if file_type in ("obj", "off"):
+        _check_text(path, file_type)
+    if file_type == "gltf":
+        try:
+            json.loads(path.read_bytes())
+        except (ValueError, UnicodeDecodeError) as exc:
+            raise InputError(
+                f"{path}: not a glTF file: not valid JSON ({' '.join(str(exc).split())[:80]})",
+                "check that the file is a glTF export, or export the scan again (GLB is one self-contained file)",
+            ) from None
     if file_type == "obj":
         _check_obj_ending(path)
 
@@ -217,6 +327,10 @@ def _read_with_trimesh(path: Path, file_type: str) -> tuple[np.ndarray, np.ndarr
         loaded = trimesh.load(str(path), file_type=file_type, process=False, force=None, **extra)
     except Exception as exc:  # trimesh raises many types for broken files
         reason = str(exc).splitlines()[0][:120] if str(exc) else type(exc).__name__
+        if isinstance(exc, KeyError):  # trimesh indexes the file's structures without checking
+            reason = f"missing entry {exc}"
+        if isinstance(exc, ImportError):  # trimesh guesses the encoding of non-UTF-8 text with an optional package
+            reason = "it is not UTF-8 text"
         raise InputError(
             f"{path}: cannot be read as {file_type.upper()} ({reason})",
             "check that the file is a complete, uncorrupted mesh export",

@@ -88,12 +88,19 @@ class Orientation:
 def _check_scale(mesh: Mesh, params: OrientParams) -> None:
     size = float(np.sqrt(2.0 * np.median(mesh.face_areas)))
     if size > _MAX_TRIANGLE_SIZE_M:
+        lo, hi = mesh.bounds()
+        extent = np.sort(hi - lo)
+        problem = f"implausible scale: the median triangle is {size:.3g} m across"
+        if extent[0] > params.max_story_height_m:
+            # every direction is taller than a story: whichever is up, the stories are implausible
+            problem += f" and the scan measures at least {extent[0]:,.0f} m in every direction, an implausible story height"
         hint = "check the units of the scan (--units)"
         for unit, factor in (("mm", 0.001), ("cm", 0.01), ("in", 0.0254)):
-            if 0.002 <= size * factor <= 0.5:
+            # suggest a unit only when it makes both the triangles and the building plausible
+            if 0.002 <= size * factor <= 0.5 and extent[-1] * factor >= 1.0:
                 hint = f"the scan seems to be in {unit}: pass --units {unit}"
                 break
-        raise GeometryError(f"implausible scale: the median triangle is {size:.3g} m across", hint)
+        raise GeometryError(problem, hint)
 
 
 def _check_floor(normals: FloatArray, heights: FloatArray, areas: FloatArray, floor: float, params: OrientParams) -> None:
