@@ -117,7 +117,8 @@ def segments_figure(mesh: Mesh, walls: FlatWalls, story: int, sheet: Sheet, para
     """Each DBSCAN wall segment in its own colour, seen from above; segments that were not kept
     as walls (too small, not floor to ceiling: furniture) in grey."""
     seg = walls.face_segment
-    sel = np.flatnonzero((seg >= 0) & (walls.segment_story[np.maximum(seg, 0)] == story))
+    valid = np.flatnonzero(seg >= 0)  # faces in some segment (there may be none at all)
+    sel = valid[walls.segment_story[seg[valid]] == story]
     title = f"Wall segments (box DBSCAN){'  story ' + str(story) if n_stories > 1 else ''}"
     fig, ax = new_figure(sheet, title, params)
     c = mesh.face_centroids[sel]
