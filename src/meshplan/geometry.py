@@ -57,6 +57,13 @@ class Mesh:
         object.__setattr__(self, "vertices", _frozen(v))
         object.__setattr__(self, "faces", _frozen(f))
 
+    def _seed(self, **cached: np.ndarray) -> Mesh:
+        """Store derived arrays computed elsewhere (``triangles``, ``_cross``) in the cache, so
+        that they are not computed twice; returns ``self``."""
+        for name, value in cached.items():
+            self.__dict__[name] = _frozen(np.asarray(value, dtype=np.float64))
+        return self
+
     @property
     def n_faces(self) -> int:
         return int(len(self.faces))

@@ -276,7 +276,9 @@ def run(
     >>> [s.floor for s in result.orientation.stories]  # doctest: +SKIP
     [0.0]
     """
-    from .export import write_results
+    from contextlib import nullcontext
+
+    from .export import RenderPool, _processes, write_results
     from .io import check_output_dir
 
     if options is None:
@@ -287,12 +289,14 @@ def run(
         check_output_dir(output, force)
     timer = _Timer(progress)
     t0 = time.perf_counter()
-    with timer.stage("load"):
-        loaded = load_mesh(scan, options.input.units, options.input.max_faces)
-        ann = load_annotations(annotations, loaded.stats.scale_to_m) if annotations is not None else Annotations()
-    result = compute(loaded.mesh, loaded.stats, ann, options, timer)
-    if output is not None:
-        write_results(result, Path(output), force=force, timer=timer, started=t0)
-    else:
-        result.timings["total"] = time.perf_counter() - t0
+    # the drawing workers start now and get ready while the stages compute
+    with RenderPool(_processes(options.render)) if output is not None else nullcontext() as pool:
+        with timer.stage("load"):
+            loaded = load_mesh(scan, options.input.units, options.input.max_faces)
+            ann = load_annotations(annotations, loaded.stats.scale_to_m) if annotations is not None else Annotations()
+        result = compute(loaded.mesh, loaded.stats, ann, options, timer)
+        if output is not None:
+            write_results(result, Path(output), force=force, timer=timer, started=t0, pool=pool)
+        else:
+            result.timings["total"] = time.perf_counter() - t0
     return result

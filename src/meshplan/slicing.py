@@ -106,3 +106,66 @@ def slice_mesh(triangles: ArrayLike, heights: ArrayLike) -> Slices:
     # a top corner touching the plane makes a single point, not a segment
     real = np.any(seg[:, 0] != seg[:, 1], axis=1)
     return Slices(h, seg[real], level[real].astype(np.int64), faces[real].astype(np.int64))
+
+
+def chain_segments(segments: ArrayLike, tolerance: float = 1e-6) -> list[FloatArray]:
+    """Join segments that share end points into polylines.
+
+    The segments of one slice of a mesh meet end to end (neighbouring triangles cut their
+    common edge at the same point, to rounding); a CAD file holding one polyline per chain
+    instead of one line per triangle is ten times smaller and faster to write and to open.
+
+    Parameters
+    ----------
+    segments
+        ``(S, 2, 2)`` segments.
+    tolerance
+        End points closer than this (on a grid of this size) are the same point.
+
+    Returns
+    -------
+    list of ``(k, 2)`` arrays
+        Polylines, each with at least two points, covering every segment once; a closed chain
+        repeats its first point at the end.
+    """
+    seg = np.asarray(segments, dtype=np.float64).reshape(-1, 2, 2)
+    if not len(seg):
+        return []
+    _, node = np.unique(np.round(seg.reshape(-1, 2) / tolerance).astype(np.int64), axis=0, return_inverse=True)
+    node = node.reshape(-1, 2)
+    # incident segments of every node, as CSR arrays
+    ends = node.reshape(-1)
+    order = np.argsort(ends, kind="stable")
+    start = np.searchsorted(ends[order], np.arange(node.max() + 2))
+    incident = order // 2  # segment of each sorted end
+    degree = np.diff(start)
+    used = np.zeros(len(seg), dtype=bool)
+
+    def walk(s: int, at: int) -> list[int]:
+        """Nodes visited from node ``at`` along segment ``s`` while the chain goes on through
+        nodes of degree 2."""
+        path = []
+        while True:
+            used[s] = True
+            at = node[s, 1] if node[s, 0] == at else node[s, 0]
+            path.append(int(at))
+            if degree[at] != 2:
+                return path
+            a, b = incident[start[at]], incident[start[at] + 1]
+            s = b if a == s else a
+            if used[s]:
+                return path
+
+    chains = []
+    # chains start at nodes of degree other than 2 (ends, junctions), then what is left is loops
+    starts = np.flatnonzero(degree[node[:, 0]] != 2).tolist() + np.flatnonzero(degree[node[:, 1]] != 2).tolist()
+    for s in starts + list(range(len(seg))):
+        if used[s]:
+            continue
+        first = node[s, 0] if (degree[node[s, 0]] != 2 or degree[node[s, 1]] == 2) else node[s, 1]
+        chains.append([int(first), *walk(s, first)])
+    # points: the first occurrence of each node among the segment ends
+    first_end = np.full(node.max() + 1, -1, dtype=np.int64)
+    first_end[ends[::-1]] = np.arange(len(ends))[::-1]
+    flat = seg.reshape(-1, 2)
+    return [flat[first_end[np.asarray(c)]] for c in chains]

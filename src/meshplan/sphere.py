@@ -152,8 +152,14 @@ def _hemisphere_bins(n: int, radius_deg: float) -> tuple[FloatArray, cKDTree, cs
     if key not in _HEMI_CACHE:
         b = fibonacci_sphere(2 * n)
         b = b[b[:, 1] >= 0]
-        near = np.abs(b @ b.T) >= np.cos(np.radians(radius_deg))
-        _HEMI_CACHE[key] = (b, cKDTree(np.r_[b, -b]), csr_matrix(near.astype(np.float64)))
+        tree = cKDTree(np.r_[b, -b])
+        # |b . b'| >= cos(r): b' or -b' within the chord 2 sin(r / 2) of b
+        pairs = tree.query_ball_point(b, 2.0 * np.sin(np.radians(radius_deg) / 2.0), return_sorted=True)
+        rows = np.repeat(np.arange(len(b)), [len(p) for p in pairs])
+        cols = np.concatenate(pairs).astype(np.int64) % len(b)
+        near = csr_matrix((np.ones(len(rows)), (rows, cols)), shape=(len(b), len(b)))
+        near.data[:] = 1.0  # a bin and its antipode's twin counted once
+        _HEMI_CACHE[key] = (b, tree, near)
     return _HEMI_CACHE[key]
 
 

@@ -15,7 +15,6 @@ from ..io import staged_directory
 from ..orient import without_ceiling
 from ..render import (
     drafting_figure,
-    pen_and_ink_raster,
     figure_bytes,
     levels_figure,
     make_sheet,
@@ -33,132 +32,190 @@ from .report import report_html
 if TYPE_CHECKING:  # pragma: no cover
     from ..pipeline import Result, _Timer
 
-__all__ = ["dumps", "plan_document", "plan_schema", "render_files", "write_results"]
+__all__ = ["RenderPool", "dumps", "plan_document", "plan_schema", "render_files", "write_results"]
 
 
-# The state the drawing jobs read; set before worker processes are forked, so they inherit it.
-_JOBS: dict = {}
+# ---------------------------------------------------------------------------------------------
+# Jobs: each makes a few files from plain arrays and small dataclasses, in this process or in a
+# worker. Their arguments are all they read, so they can run in workers forked before the
+# result existed (see RenderPool).
 
 
-def _job(key: tuple) -> dict[str, bytes]:
-    """Render one group of files (run in the main process or a forked worker)."""
-    result = _JOBS["result"]
+def _pen_files(plan, annotations, sheet, params, n_stories: int, fmts: tuple[str, ...]) -> dict[str, bytes]:
+    fig = pen_and_ink_figure(plan, annotations, sheet, params, n_stories)
+    return {f"pen-and-ink-{plan.story.index}.{fmt}": figure_bytes(fig, fmt) for fmt in fmts}
+
+
+def _drafting_files(plan, annotations, sheet, params, n_stories: int, symbols, fmts: tuple[str, ...]) -> dict[str, bytes]:
+    fig = drafting_figure(plan, annotations, sheet, params, n_stories, symbols)
+    return {f"drafting-{plan.story.index}.{fmt}": figure_bytes(fig, fmt) for fmt in fmts}
+
+
+def _segments_files(centroids, walls, story: int, sheet, params, n_stories: int) -> dict[str, bytes]:
+    return {f"wall-segments-{story}.png": figure_bytes(segments_figure(centroids, walls, story, sheet, params, n_stories), "png")}
+
+
+def _normals_files(normals, areas, orientation) -> dict[str, bytes]:
+    return {"normals.png": figure_bytes(normals_figure(normals, areas, orientation), "png")}
+
+
+def _levels_files(orientation, params) -> dict[str, bytes]:
+    return {"levels.png": figure_bytes(levels_figure(orientation, params), "png")}
+
+
+def _dxf_files(story: int, walls_cut, reference, annotations, symbols, rooms) -> dict[str, bytes]:
+    data = drafting_dxf(walls_cut, reference, annotations, f"meshplan drafting plan, story {story}", symbols, rooms)
+    return {f"drafting-{story}.dxf": data}
+
+
+def _model_files(result: Result, story: int) -> dict[str, bytes]:
+    o, mesh, sp = result.orientation, result.mesh, result.stories[story]
+    keep = (o.face_story == story) & without_ceiling(mesh.face_centroids[:, 1], mesh.face_normals[:, 1], sp.story, result.options.orient.slab_tolerance_m)
+    return {
+        f"story-{story}.glb": glb_bytes(mesh.submesh(np.flatnonzero(keep)), sp.annotations, f"story {story}"),
+        f"flat-walls-{story}.glb": glb_bytes(result.walls.mesh(story, result.openings.holes()), sp.annotations, f"flat walls {story}", WALL_RGBA),
+    }
+
+
+def _jobs(result: Result) -> list[tuple]:
+    """``(function, *arguments)`` of every file but the 3D models and the report, slowest first:
+    the drawings (the paper's slicing and drawing), then the DXF files."""
     o, mesh, params = result.orientation, result.mesh, result.options.render
     n = len(result.stories)
-    kind = key[0]
-    if kind == "levels":
-        return {"levels.png": figure_bytes(levels_figure(o, params), "png")}
-    if kind == "normals":
-        return {"normals.png": figure_bytes(normals_figure(mesh.face_normals, mesh.face_areas, o), "png")}
-    if kind == "oriented":
-        return {"oriented.glb": glb_bytes(mesh, result.annotations, "scan")}
-    if kind == "ifc":
-        from .ifc import ifc_bytes
-
-        return {"model.ifc": ifc_bytes(result)}
-    i = key[1]
-    sp = result.stories[i]
-    sheet, symbols = _JOBS["sheets"][i], _JOBS["symbols"][i]
-    if kind == "pen":
-        fig = pen_and_ink_figure(sp.pen_and_ink, sp.annotations, sheet, params, n, ink=_JOBS["ink"][i])
-        return {f"pen-and-ink-{i}.{key[2]}": figure_bytes(fig, key[2])}
-    if kind == "drafting":
-        fig = drafting_figure(sp.drafting, sp.annotations, sheet, params, n, symbols)
-        return {f"drafting-{i}.{fmt}": figure_bytes(fig, fmt) for fmt in key[2:]}
-    if kind == "segments":
-        return {f"wall-segments-{i}.png": figure_bytes(segments_figure(mesh, result.walls, i, sheet, params, n), "png")}
-    if kind == "models":
-        heights = mesh.face_centroids[:, 1]
-        keep = (o.face_story == i) & without_ceiling(heights, mesh.face_normals[:, 1], sp.story, result.options.orient.slab_tolerance_m)
-        return {
-            f"story-{i}.glb": glb_bytes(mesh.submesh(np.flatnonzero(keep)), sp.annotations, f"story {i}"),
-            f"flat-walls-{i}.glb": glb_bytes(result.walls.mesh(i, result.openings.holes()), sp.annotations, f"flat walls {i}", WALL_RGBA),
-        }
-    if kind == "dxf":
+    jobs: list[tuple] = []
+    later: list[tuple] = []
+    for sp in result.stories:
+        i = sp.story.index
+        sheet = make_sheet(mesh.face_centroids[o.face_story == i][:, [0, 2]], params)
+        symbols = plan_symbols(i, result.walls, result.openings, result.rooms, result.physical_walls, params.imperial)
+        jobs.append((_pen_files, sp.pen_and_ink, sp.annotations, sheet, params, n, ("png", "svg", "pdf")))
+        jobs.append((_drafting_files, sp.drafting, sp.annotations, sheet, params, n, symbols, ("png", "svg", "pdf")))
+        jobs.append((_segments_files, mesh.face_centroids, result.walls, i, sheet, params, n))
         faces = np.flatnonzero(o.face_story == i)
-        reference = slice_mesh(mesh.triangles[faces], np.array([sp.drafting.height]))
-        data = drafting_dxf(
-            sp.drafting.slices.segments,
-            reference.segments,
-            sp.annotations,
-            f"meshplan drafting plan, story {i}",
-            symbols,
-            [r for r in result.rooms if r.story == i],
-        )
-        return {f"drafting-{i}.dxf": data}
-    raise ValueError(key)  # pragma: no cover
+        reference = slice_mesh(mesh.triangles[faces], np.array([sp.drafting.height])).segments
+        rooms = [r for r in result.rooms if r.story == i]
+        later.append((_dxf_files, i, sp.drafting.slices.segments, reference, sp.annotations, symbols, rooms))
+    jobs += [(_normals_files, mesh.face_normals, mesh.face_areas, o), (_levels_files, o, params)]
+    return jobs + later
+
+
+def _call(job: tuple) -> dict[str, bytes]:
+    return job[0](*job[1:])
+
+
+def _start_worker() -> None:
+    """A drawing worker's first steps: yield the CPU to the process computing the stages (the
+    drawings wait for it anyway), then get matplotlib ready."""
+    try:
+        os.nice(10)
+    except OSError:  # pragma: no cover - not allowed here: run at the same priority
+        pass
+    _warm_matplotlib()
+
+
+def _warm_matplotlib() -> None:
+    """Draw and save one small figure in every format: a process's first figure imports
+    matplotlib, loads the fonts and sets up each backend (about 0.5 s)."""
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(1.0, 1.0), dpi=30)
+    ax = fig.add_axes((0.2, 0.2, 0.6, 0.6))
+    ax.plot([0.0, 1.0], [0.0, 1.0])
+    ax.set_xlabel("x (m)", fontsize=6)
+    fig.text(0.1, 0.9, "Plan 1.00 m²", fontsize=9, weight="bold")
+    for fmt in ("png", "pdf", "svg"):
+        figure_bytes(fig, fmt)
 
 
 def _processes(params) -> int:
-    """Worker processes for the drawing jobs: forked workers share the result for free on
-    Linux; elsewhere everything runs in the main process."""
+    """Worker processes for the drawing jobs (forked: Linux only; elsewhere, none)."""
     if not sys.platform.startswith("linux"):
         return 1
     n = params.processes or min(os.cpu_count() or 1, 4)
     return max(1, int(n))
 
 
-def _run_jobs(keys: list[tuple], processes: int) -> dict[str, bytes]:
-    out: dict[str, bytes] = {}
-    if processes > 1 and len(keys) > 1:
-        import multiprocessing
-        from concurrent.futures import ProcessPoolExecutor
+class RenderPool:
+    """Worker processes that draw the plans, started before there is anything to draw.
 
-        with ProcessPoolExecutor(max_workers=min(processes, len(keys)), mp_context=multiprocessing.get_context("fork")) as pool:
-            for part in pool.map(_job, keys):
-                out.update(part)
-    else:
-        for key in keys:
-            out.update(_job(key))
-    return out
+    :func:`meshplan.pipeline.run` opens one when a run starts: the workers are forked while the
+    process is still small, and each imports matplotlib and draws a first figure (about half a
+    second) on the other cores while this process reads the scan and computes the stages. The
+    jobs then get what they draw as arguments. With ``processes`` 1 (or off Linux) there are
+    no workers and everything is drawn here.
+    """
+
+    def __init__(self, processes: int) -> None:
+        self.executor = None
+        if processes > 1 and sys.platform.startswith("linux"):
+            import multiprocessing
+            from concurrent.futures import ProcessPoolExecutor
+
+            self.executor = ProcessPoolExecutor(processes, mp_context=multiprocessing.get_context("fork"), initializer=_start_worker)
+            self.executor.submit(int)  # fork the workers now (not at the first job)
+
+    def __enter__(self) -> RenderPool:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        if self.executor is not None:
+            self.executor.shutdown(wait=True, cancel_futures=True)
 
 
-def render_files(result: Result, timer: _Timer | None = None) -> dict[str, bytes]:
+def render_files(result: Result, timer: _Timer | None = None, pool: RenderPool | None = None) -> dict[str, bytes]:
     """Every output file except plan.json, as ``name -> bytes``, in a deterministic order.
 
-    Drawing counts as the paper's slicing-and-drawing time (``slice_draw``); building the 3D
-    models, CAD files and the report as ``write``. Both run as independent jobs spread over
-    ``RenderParams.processes`` forked worker processes.
+    The drawings count as the paper's slicing-and-drawing time (``slice_draw``); the DXF files,
+    the 3D models and the report as ``write``. Drawings and DXF files are drawn by the workers
+    of ``pool`` (one is opened here when none is given and ``RenderParams.processes`` asks for
+    workers) while this process builds the 3D models, which would cost more to send than to
+    make.
     """
-    from contextlib import nullcontext
+    from contextlib import ExitStack, nullcontext
 
     stage = timer.stage if timer else (lambda name: nullcontext())
-    o, mesh, params = result.orientation, result.mesh, result.options.render
-    stories = [sp.story.index for sp in result.stories]
-    _JOBS.clear()
-    _JOBS["result"] = result
-    _JOBS["sheets"] = {i: make_sheet(mesh.face_centroids[o.face_story == i][:, [0, 2]], params) for i in stories}
-    _JOBS["symbols"] = {
-        i: plan_symbols(i, result.walls, result.openings, result.rooms, result.physical_walls, params.imperial) for i in stories
-    }
-    processes = _processes(params)
     files: dict[str, bytes] = {}
-    try:
+    with ExitStack() as stack:
+        if pool is None:
+            pool = stack.enter_context(RenderPool(_processes(result.options.render)))
         with stage("slice_draw"):
-            # the ink raster is shared by the three formats of the pen-and-ink plan
-            _JOBS["ink"] = {i: pen_and_ink_raster(result.stories[i].pen_and_ink, _JOBS["sheets"][i], params) for i in stories}
-            # one job per format, the slowest first, so that the workers finish together
-            keys = [("pen", i, fmt) for i in stories for fmt in ("pdf", "png", "svg")]
-            keys += [("drafting", i, "png", "svg", "pdf") for i in stories] + [("segments", i) for i in stories]
-            files.update(_run_jobs(keys + [("normals",), ("levels",)], processes))
+            jobs = _jobs(result)
+            n_draw = sum(job[0] not in (_dxf_files,) for job in jobs)
+            if pool.executor is not None:
+                pending = [pool.executor.submit(_call, job) for job in jobs]
+                for future in pending[:n_draw]:
+                    files.update(future.result())
+            else:
+                for job in jobs[:n_draw]:
+                    files.update(_call(job))
         with stage("write"):
-            keys = [("dxf", i) for i in stories] + [("models", i) for i in stories] + [("oriented",)]
             if result.options.export.ifc:
-                keys.insert(0, ("ifc",))
-            files.update(_run_jobs(keys, processes))
+                from .ifc import ifc_bytes
+
+                files["model.ifc"] = ifc_bytes(result)
+            for sp in result.stories:
+                files.update(_model_files(result, sp.story.index))
+            files["oriented.glb"] = glb_bytes(result.mesh, result.annotations, "scan")
+            if pool.executor is not None:
+                for future in pending[n_draw:]:
+                    files.update(future.result())
+            else:
+                for job in jobs[n_draw:]:
+                    files.update(_call(job))
             # last: the report inlines the other files
             files["report.html"] = report_html(result, files).encode("utf-8")
-    finally:
-        _JOBS.clear()
     return dict(sorted(files.items()))
 
 
-def write_results(result: Result, outdir: Path, force: bool = False, timer: _Timer | None = None, started: float | None = None) -> None:
-    """Render and write every output of ``result`` into ``outdir`` (atomically).
+def write_results(
+    result: Result, outdir: Path, force: bool = False, timer: _Timer | None = None, started: float | None = None, pool: RenderPool | None = None
+) -> None:
+    """Render and write every output of ``result`` into ``outdir`` (atomically), drawing with
+    the workers of ``pool`` when given.
 
     Sets ``result.output_dir``, ``result.files`` and the ``write`` and ``total`` timings.
     """
-    files = render_files(result, timer)
+    files = render_files(result, timer, pool)
     t0 = time.perf_counter()
     with staged_directory(outdir, force=force) as tmp:
         for name, data in files.items():

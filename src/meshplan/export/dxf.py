@@ -11,6 +11,7 @@ import io
 import numpy as np
 
 from ..geometry import Annotations
+from ..slicing import chain_segments
 
 LAYERS = {
     "WALLS": 7,  # white/black
@@ -57,8 +58,9 @@ def drafting_dxf(
     msp = doc.modelspace()
     for seg in np.asarray(wall_segments).reshape(-1, 2, 2):
         msp.add_line(_p(seg[0]), _p(seg[1]), dxfattribs={"layer": "WALLS", "lineweight": 50})
-    for seg in np.asarray(slice_segments).reshape(-1, 2, 2):
-        msp.add_line(_p(seg[0]), _p(seg[1]), dxfattribs={"layer": "SLICES"})
+    # the scan's cut, one polyline per chain of segments rather than one line per triangle
+    for chain in chain_segments(slice_segments):
+        msp.add_lwpolyline([_p(q) for q in chain], dxfattribs={"layer": "SLICES"})
     for i, (label, kind) in enumerate(zip(annotations.labels, annotations.kinds)):
         pos = annotations.positions[i]
         c = (float(pos[0]), float(-pos[2]))

@@ -394,7 +394,7 @@ def clean_mesh(vertices: np.ndarray, faces: np.ndarray) -> tuple[Mesh, dict[str,
     repeated = (faces[:, 0] == faces[:, 1]) | (faces[:, 1] == faces[:, 2]) | (faces[:, 0] == faces[:, 2])
     degenerate = repeated | ~(area > MIN_FACE_AREA_M2)
     counts["dropped_degenerate"] = int(degenerate.sum())
-    faces = faces[~degenerate]
+    faces, tri, cross = faces[~degenerate], tri[~degenerate], cross[~degenerate]
     # duplicates: the same three vertices in any order; keep the first occurrence
     keep = np.zeros(len(faces), dtype=bool)
     if len(faces):
@@ -414,7 +414,8 @@ def clean_mesh(vertices: np.ndarray, faces: np.ndarray) -> tuple[Mesh, dict[str,
     used = np.zeros(len(uniq), dtype=bool)
     used[faces.reshape(-1)] = True
     remap = np.cumsum(used) - 1
-    return Mesh(uniq[used], remap[faces]), counts
+    # the corners and cross products are those the mesh would compute: keep them
+    return Mesh(uniq[used], remap[faces])._seed(triangles=tri[keep], _cross=cross[keep]), counts
 
 
 def load_mesh(path: str | os.PathLike, units: str = "m", max_faces: int | None = None) -> LoadedMesh:

@@ -178,7 +178,7 @@ def _refine_kmeans(normals: FloatArray, areas: FloatArray, rough: FloatArray, co
     g = unit(rough)
     dots = normals @ g
     cand = np.flatnonzero(np.abs(dots) >= np.cos(np.radians(cones_deg[0] + 10.0)))
-    n = normals[cand] * np.sign(dots[cand])[:, None]
+    n = np.ascontiguousarray(normals[cand] * np.sign(dots[cand])[:, None])
     a = areas[cand]
     used = 0
     for cone in cones_deg:
@@ -190,7 +190,7 @@ def _refine_kmeans(normals: FloatArray, areas: FloatArray, rough: FloatArray, co
                 return g, 0
             if previous is not None and np.array_equal(sel, previous):
                 break
-            g = unit(a[sel] @ n[sel])
+            g = unit(np.where(sel, a, 0.0) @ n)  # no copy of the selected rows
             previous = sel
         used = int(sel.sum())
         keep = n @ g >= np.cos(np.radians(cone + 2.0))

@@ -167,9 +167,12 @@ def footprint_raster(mesh: Mesh, orientation: Orientation, story: Story, floor: 
     faces = np.flatnonzero(orientation.face_story == story.index)
     h = mesh.face_centroids[faces, 1]
     faces = faces[(h > story.floor) & (h < story.ceiling)]
-    pts = sample_triangles(mesh.triangles[faces], floor.cell * 0.7)[:, [0, 2]]
-    grid = _raster(pts, floor.cell, floor).grid | floor.grid
+    # the vertices of faces up to two cells across cover them; larger faces are sampled
     k = max(1, int(round(closing_m / floor.cell)))
+    tri = mesh.triangles[faces]
+    big = np.max(np.linalg.norm(tri - np.roll(tri, 1, axis=1), axis=2), axis=1) > 2 * floor.cell
+    pts = np.concatenate([mesh.vertices[np.unique(mesh.faces[faces[~big]])], sample_triangles(tri[big], floor.cell)])
+    grid = _raster(pts[:, [0, 2]], floor.cell, floor).grid | floor.grid
     pad = np.pad(grid, k)
     grid = binary_closing(pad, np.ones((2 * k + 1, 2 * k + 1), dtype=bool))[k:-k, k:-k]
     return FloorRaster(floor.x0, floor.z0, floor.cell, binary_fill_holes(grid))
@@ -285,7 +288,10 @@ def _parts(shape, params: PlanParams) -> list[Polygon]:
 def _opening(shape, radius: float):
     """Morphological opening with a square: drops the parts narrower than ``2 * radius`` and
     keeps right-angled corners."""
-    return shape.buffer(-radius, join_style="mitre").buffer(radius, join_style="mitre", mitre_limit=2.0).intersection(shape)
+    # GEOS divides by zero on the collinear spikes that a shrunk ring can have; the result is
+    # still right, so numpy's warning about it would only alarm the user
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return shape.buffer(-radius, join_style="mitre").buffer(radius, join_style="mitre", mitre_limit=2.0).intersection(shape)
 
 
 def _classify(face: Polygon, raster: FloorRaster, wall_lines, params: PlanParams):

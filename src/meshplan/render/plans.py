@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..geometry import Annotations, Mesh
+from ..geometry import Annotations
 from ..plan import DraftingPlan, PenAndInkPlan
 from ..plan.symbols import PlanSymbols
 from ..walls import FlatWalls
@@ -113,15 +113,16 @@ def _draw_dimensions(ax, symbols: PlanSymbols) -> None:
     ax.add_collection(LineCollection(ticks, colors=DIM_COLOR, linewidths=0.5, zorder=2))
 
 
-def segments_figure(mesh: Mesh, walls: FlatWalls, story: int, sheet: Sheet, params: RenderParams, n_stories: int = 1):
+def segments_figure(centroids: np.ndarray, walls: FlatWalls, story: int, sheet: Sheet, params: RenderParams, n_stories: int = 1):
     """Each DBSCAN wall segment in its own colour, seen from above; segments that were not kept
-    as walls (too small, not floor to ceiling: furniture) in grey."""
+    as walls (too small, not floor to ceiling: furniture) in grey. ``centroids`` are the
+    ``(F, 3)`` face centroids of the mesh the walls were found in."""
     seg = walls.face_segment
     valid = np.flatnonzero(seg >= 0)  # faces in some segment (there may be none at all)
     sel = valid[walls.segment_story[seg[valid]] == story]
     title = f"Wall segments (box DBSCAN){'  story ' + str(story) if n_stories > 1 else ''}"
     fig, ax = new_figure(sheet, title, params)
-    c = mesh.face_centroids[sel]
+    c = centroids[sel]
     s = seg[sel]
     kept = walls.segment_kept[s]
     from matplotlib.colors import to_rgba_array
