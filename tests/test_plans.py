@@ -135,6 +135,24 @@ def test_slicing_is_vectorized_over_planes_and_triangles():
         assert t[:, 1].min() <= y <= t[:, 1].max()
 
 
+def test_chained_slice_segments_cover_every_segment_once():
+    """The DXF's slice polylines: a box room cut between two grid rows gives one closed loop,
+    and the chains hold exactly the segments of the cut."""
+    from meshplan.slicing import chain_segments
+
+    v, f = box_room(5.0, 4.0, 2.6, cell=0.1)
+    segs = slice_mesh(v[f], np.array([1.25])).segments
+    chains = chain_segments(segs[np.random.default_rng(1).permutation(len(segs))])
+    assert len(chains) == 1 and np.allclose(chains[0][0], chains[0][-1])  # one closed ring
+    assert sum(len(c) - 1 for c in chains) == len(segs)
+    ring = chains[0]
+    assert np.isclose(np.abs(np.sum(ring[:-1, 0] * ring[1:, 1] - ring[1:, 0] * ring[:-1, 1])) / 2, 20.0)
+    # an open chain, a T junction and a lone segment stay apart, each segment used once
+    extra = np.array([[[10, 0], [11, 0]], [[11, 0], [12, 0]], [[11, 0], [11, 1]], [[20, 0], [21, 1]]], float)
+    chains = chain_segments(extra)
+    assert sum(len(c) - 1 for c in chains) == 4 and len(chains) == 4
+
+
 def test_plan_json_validates_against_its_schema(computed):
     import jsonschema
 

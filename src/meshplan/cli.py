@@ -144,10 +144,11 @@ def run(
     from .pipeline import run as run_pipeline
 
     _setup_logging(verbose, quiet)
-    params: dict[str, Any] = dict(
-        units=units.value if units else None,
-        up=up.value if up else None,
-        gravity_method=gravity.value if gravity else None,
+    params = _options(
+        set_,
+        units=units,
+        up=up,
+        gravity_method=gravity,
         slices=slices,
         opacity=opacity,
         imperial=imperial,
@@ -158,7 +159,7 @@ def run(
         box_depth_m=box_depth,
         box_height_m=box_height,
         min_points=min_points,
-        wall_directions=wall_directions.value if wall_directions else None,
+        wall_directions=wall_directions,
         min_wall_length_m=min_wall_length,
         floor_reach_m=floor_reach,
         ceiling_reach_m=ceiling_reach,
@@ -167,8 +168,6 @@ def run(
         max_faces=max_faces,
         ifc=ifc or None,
     )
-    params = {k: v for k, v in params.items() if v is not None}
-    params.update(_parse_set(set_))
     out = output if output is not None else default_output_dir(scan)
     from .progress import StageProgress
 
@@ -276,17 +275,7 @@ def batch(
     from .batch import BatchInterrupted, BatchProgress, ScansFailed, find_annotations, find_scans, print_batch_summary, run_batch
 
     _setup_logging(0, quiet)
-    params: dict[str, Any] = dict(
-        units=units.value if units else None,
-        up=up.value if up else None,
-        gravity_method=gravity.value if gravity else None,
-        slices=slices,
-        imperial=imperial,
-        dpi=dpi,
-        max_faces=max_faces,
-    )
-    params = {k: v for k, v in params.items() if v is not None}
-    params.update(_parse_set(set_))
+    params = _options(set_, units=units, up=up, gravity_method=gravity, slices=slices, imperial=imperial, dpi=dpi, max_faces=max_faces)
     # several inputs (e.g. an unquoted glob the shell expanded) are concatenated, duplicates dropped
     scans = list(dict.fromkeys(p for spec in inputs for p in find_scans(spec, exclude=output)))
     jobs = [(s, find_annotations(s)) for s in scans]
@@ -304,6 +293,14 @@ def batch(
             click.echo(f"error: {row.scan}: {row.error}", err=True)
     if summary.failed:  # exit status 1 (main() prints the message)
         raise ScansFailed(f"{len(summary.failed)} of {len(summary.rows)} scans failed", f"see {output / 'summary.csv'}")
+
+
+def _options(settings: list[str], **given: Any) -> dict[str, Any]:
+    """The options given on the command line (choices as their values, unset ones left out)
+    and the ``--set NAME=VALUE`` ones, as keywords of :func:`meshplan.run`."""
+    params = {k: getattr(v, "value", v) for k, v in given.items() if v is not None}
+    params.update(_parse_set(settings))
+    return params
 
 
 def _usage_error_types() -> tuple[type[BaseException], ...]:
