@@ -22,6 +22,7 @@ from conftest import box_room
 SCENES = [
     ("apartment", 0, {}),
     ("apartment", 4, {"z_up": True, "winding": "outward"}),
+    ("office", 3, {"winding": "mixed"}),  # every planar patch wound at random: walls face their floor
     ("office", 1, {}),
     ("multistory", 1, {}),
     ("room", 5, {"tilt_deg": 6.0}),

@@ -28,18 +28,36 @@ def face_components(faces: IntArray, n_vertices: int) -> IntArray:
     return labels[faces[:, 0]].astype(np.int64)
 
 
-def inward_flips(mesh: Mesh, normals_y: FloatArray, heights: FloatArray, stories: tuple[Story, ...], tolerance_m: float = 0.1) -> np.ndarray:
+def inward_flips(
+    mesh: Mesh,
+    normals: FloatArray,
+    centroids: FloatArray,
+    heights: FloatArray,
+    stories: tuple[Story, ...],
+    tolerance_m: float = 0.1,
+) -> np.ndarray:
     """Boolean mask of the faces whose winding should be reversed to face into the rooms.
 
     Parameters
     ----------
     mesh
-        The mesh (only its connectivity is used).
-    normals_y, heights
-        Up component of the face normals and centroid heights, in the levelled frame.
+        The mesh (only its connectivity and face areas are used).
+    normals, centroids
+        ``(F, 3)`` face normals and centroids in a levelled frame (+y up).
+    heights
+        ``(F,)`` centroid heights, on the scale of the stories' floors and ceilings.
     stories
         Floors and ceilings found.
+
+    Notes
+    -----
+    Each connected component is turned by the votes of its floor faces (normals up) and ceiling
+    faces (normals down). A component without any, such as a wall scanned as a patch of its
+    own, is turned by its walls: a wall faces the side its story's floor is on, just in front of
+    its foot (:data:`_FLOOR_PROBES_M`). Only when neither says anything does it follow the
+    majority of the mesh.
     """
+    normals_y = normals[:, 1]
     areas = mesh.face_areas
     vote = np.zeros(mesh.n_faces)
     horiz = np.abs(normals_y) > np.cos(np.radians(20.0))
@@ -50,7 +68,59 @@ def inward_flips(mesh: Mesh, normals_y: FloatArray, heights: FloatArray, stories
             near_ceiling = horiz & (np.abs(heights - s.ceiling) < tolerance_m)
             vote[near_ceiling] -= areas[near_ceiling] * np.sign(normals_y[near_ceiling])
     comp = face_components(mesh.faces, mesh.n_vertices)
-    per = np.bincount(comp, weights=vote)
+    per = np.bincount(comp, weights=vote, minlength=int(comp.max()) + 1 if len(comp) else 0)
+    undecided = per == 0
+    if undecided.any():
+        walls = _wall_votes(normals, centroids, heights, areas, stories, horiz, tolerance_m, undecided[comp])
+        per = per + np.bincount(comp, weights=walls, minlength=len(per))
     majority_out = vote.sum() < 0
     flip_comp = (per < 0) | ((per == 0) & majority_out)
     return flip_comp[comp]
+
+
+#: Distances (m) in front of and behind a wall at which its story's floor is looked for: the
+#: floor runs up to the wall on the room side; behind lies the wall's thickness (then, behind a
+#: partition, the next room, which the nearer probe misses) or nothing.
+_FLOOR_PROBES_M = (0.08, 0.2)
+_FLOOR_CELL_M = 0.05
+
+
+def _wall_votes(
+    normals: FloatArray,
+    centroids: FloatArray,
+    heights: FloatArray,
+    areas: FloatArray,
+    stories: tuple[Story, ...],
+    horiz: np.ndarray,
+    tolerance_m: float,
+    candidates: np.ndarray,
+) -> FloatArray:
+    """``(F,)`` votes of the near-vertical faces in ``candidates``: positive when their normal
+    points to the side where their story's floor is."""
+    out = np.zeros(len(normals))
+    vertical = candidates & (np.abs(normals[:, 1]) < np.sin(np.radians(30.0)))
+    for s in stories:
+        floor = horiz & (np.abs(heights - s.floor) < tolerance_m)
+        mine = np.flatnonzero(vertical & (heights > s.floor) & (heights < s.ceiling))
+        if not floor.any() or not len(mine):
+            continue
+        cells = np.floor(centroids[floor][:, [0, 2]] / _FLOOR_CELL_M).astype(np.int64)
+        lo = cells.min(axis=0)
+        grid = np.zeros(tuple(cells.max(axis=0) - lo + 1), dtype=bool)
+        grid[cells[:, 0] - lo[0], cells[:, 1] - lo[1]] = True
+
+        def has_floor(p: FloatArray) -> FloatArray:
+            c = np.floor(p / _FLOOR_CELL_M).astype(np.int64) - lo
+            ok = (c[:, 0] >= 0) & (c[:, 0] < grid.shape[0]) & (c[:, 1] >= 0) & (c[:, 1] < grid.shape[1])
+            found = np.zeros(len(p))
+            found[ok] = grid[c[ok, 0], c[ok, 1]]
+            return found
+
+        u = normals[mine][:, [0, 2]]
+        u /= np.maximum(np.linalg.norm(u, axis=1), 1e-12)[:, None]
+        foot = centroids[mine][:, [0, 2]]
+        v = np.zeros(len(mine))
+        for d in _FLOOR_PROBES_M:
+            v += has_floor(foot + d * u) - has_floor(foot - d * u)
+        out[mine] = areas[mine] * v
+    return out
