@@ -532,3 +532,21 @@ def test_runs_are_deterministic(tmp_path, good):
             da, db = timing.sub(b"", da), timing.sub(b"", db)
         if name != "plan.json":
             assert da == db, name
+
+
+def test_a_dead_drawing_worker_is_replaced_by_the_main_process(good):
+    """A drawing worker killed (say, for memory) before or during the jobs: the main process
+    draws what it left, and the files are the same."""
+    import meshplan
+    from meshplan.export import RenderPool, render_files
+
+    result = meshplan.run(good)
+    with RenderPool(2) as pool:
+        reference = render_files(result, pool=pool)
+    with RenderPool(2) as pool:
+        time.sleep(0.5)
+        for p in list(pool.executor._processes.values()):
+            p.kill()
+        again = render_files(result, pool=pool)
+    mask = lambda files: {k: v for k, v in files.items() if k != "report.html"}  # noqa: E731 - it shows timings
+    assert mask(again) == mask(reference)

@@ -3,6 +3,7 @@ appears atomically (see :func:`meshplan.io.staged_directory`)."""
 
 from __future__ import annotations
 
+import logging
 import os
 import sys
 import time
@@ -31,6 +32,8 @@ from .report import report_html
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..pipeline import Result, _Timer
+
+log = logging.getLogger("meshplan")
 
 __all__ = ["RenderPool", "dumps", "plan_document", "plan_schema", "render_files", "write_results"]
 
@@ -151,8 +154,12 @@ class RenderPool:
             import multiprocessing
             from concurrent.futures import ProcessPoolExecutor
 
-            self.executor = ProcessPoolExecutor(processes, mp_context=multiprocessing.get_context("fork"), initializer=_start_worker)
-            self.executor.submit(int)  # fork the workers now (not at the first job)
+            try:
+                self.executor = ProcessPoolExecutor(processes, mp_context=multiprocessing.get_context("fork"), initializer=_start_worker)
+                self.executor.submit(int)  # fork the workers now (not at the first job)
+            except OSError as exc:  # no processes left to fork: draw here
+                log.debug("no drawing workers (%s); drawing in this process", exc)
+                self.executor = None
 
     def __enter__(self) -> RenderPool:
         return self
@@ -160,6 +167,32 @@ class RenderPool:
     def __exit__(self, *exc) -> None:
         if self.executor is not None:
             self.executor.shutdown(wait=True, cancel_futures=True)
+
+
+def _submit(pool: RenderPool, jobs: list[tuple]) -> list:
+    """The jobs' futures from the pool's workers, or ``None`` for each when there are none."""
+    if pool.executor is None:
+        return [None] * len(jobs)
+    from concurrent.futures.process import BrokenProcessPool
+
+    try:
+        return [pool.executor.submit(_call, job) for job in jobs]
+    except BrokenProcessPool:  # a worker died before the jobs came (killed for memory)
+        log.warning("a drawing worker died; drawing in the main process instead")
+        return [None] * len(jobs)
+
+
+def _result(job: tuple, future) -> dict[str, bytes]:
+    """The files of ``job``: from its worker, or made here when it has none or its worker died
+    (the files are the same either way)."""
+    from concurrent.futures.process import BrokenProcessPool
+
+    if future is not None:
+        try:
+            return future.result()
+        except BrokenProcessPool:
+            log.warning("a drawing worker died; drawing in the main process instead")
+    return _call(job)
 
 
 def render_files(result: Result, timer: _Timer | None = None, pool: RenderPool | None = None) -> dict[str, bytes]:
@@ -181,13 +214,9 @@ def render_files(result: Result, timer: _Timer | None = None, pool: RenderPool |
         with stage("slice_draw"):
             jobs = _jobs(result)
             n_draw = sum(job[0] not in (_dxf_files,) for job in jobs)
-            if pool.executor is not None:
-                pending = [pool.executor.submit(_call, job) for job in jobs]
-                for future in pending[:n_draw]:
-                    files.update(future.result())
-            else:
-                for job in jobs[:n_draw]:
-                    files.update(_call(job))
+            pending = _submit(pool, jobs)
+            for job, future in zip(jobs[:n_draw], pending[:n_draw]):
+                files.update(_result(job, future))
         with stage("write"):
             if result.options.export.ifc:
                 from .ifc import ifc_bytes
@@ -196,12 +225,8 @@ def render_files(result: Result, timer: _Timer | None = None, pool: RenderPool |
             for sp in result.stories:
                 files.update(_model_files(result, sp.story.index))
             files["oriented.glb"] = glb_bytes(result.mesh, result.annotations, "scan")
-            if pool.executor is not None:
-                for future in pending[n_draw:]:
-                    files.update(future.result())
-            else:
-                for job in jobs[n_draw:]:
-                    files.update(_call(job))
+            for job, future in zip(jobs[n_draw:], pending[n_draw:]):
+                files.update(_result(job, future))
             # last: the report inlines the other files
             files["report.html"] = report_html(result, files).encode("utf-8")
     return dict(sorted(files.items()))
