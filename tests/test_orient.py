@@ -128,3 +128,13 @@ def test_real_scans(name):
             assert not st.ceiling_found
         else:
             assert abs(st.ceiling - offset - ceiling) < 0.05
+
+
+@pytest.mark.parametrize("preset, seed, kw", [("apartment", 1, {}), ("room", 2, {"z_up": True}), ("office", 0, {"yaw_deg": 30.0})])
+def test_empty_buildings_are_put_the_right_way_up_by_their_doors(computed, preset, seed, kw):
+    """Without furniture a scan says little about up and down (and its door heads point the
+    wrong way); doors reach down to the floor, so the way up that shows them is up."""
+    scan, result = computed(preset, seed, furniture=False, **kw)
+    gravity, yaw, heights = errors(result.orientation, scan.truth)
+    assert gravity < 0.2 and yaw < 0.3 and max(heights) < 0.02
+    assert result.orientation.gravity.sign_by == "doors"

@@ -11,13 +11,13 @@ import os
 import time
 from collections.abc import Callable
 from contextlib import contextmanager
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from .errors import GeometryError
+from .errors import GeometryError, MeshplanError
 from .geometry import Annotations, Mesh
 from .io import LoadStats, load_annotations, load_mesh
 from .options import RunOptions
@@ -166,6 +166,46 @@ class _Timer:
             self.progress(name, "done")
 
 
+#: Below this evidence (a log-ratio, see :func:`meshplan.orient.gravity.sign_evidence`) the
+#: scan shows too little furniture to tell up from down (furnished synthetic scans give 1.2 and
+#: more, real scans 0.3-2.3, empty buildings near 0, or below it from their door heads), and the
+#: doors decide.
+WEAK_SIGN_EVIDENCE = 1.0
+
+
+def _up_in_doubt(orientation: Orientation, options: RunOptions) -> bool:
+    g = orientation.gravity
+    return options.orient.up == "auto" and g.method == "kmeans" and abs(g.sign_evidence) < WEAK_SIGN_EVIDENCE
+
+
+def _up_by_doors(mesh: Mesh, orientation: Orientation, plan_mesh: Mesh, options: RunOptions):
+    """Doors reach down to the floor: the way up that shows clearly more doors is up.
+
+    Upside down, a door is a gap hanging from the ceiling, which no door detector takes for a
+    door; every room has one, furnished or not. Returns the orientation and plan mesh kept and
+    their walls and openings (computed here, so that they are not computed again).
+    """
+    def doors(o: Orientation, m: Mesh):
+        walls = find_flat_walls(m, o, options.walls)
+        openings = find_openings(m, o, walls, options.plan)
+        return sum(k == "door" for k in openings.kind), (walls, openings)
+
+    n_here, found = doors(orientation, plan_mesh)
+    try:
+        other = orient(mesh, options.orient, up_hint=-orientation.gravity.up)
+    except MeshplanError:  # upside down there is no floor at all
+        return orientation, plan_mesh, found
+    other_mesh = mesh.transformed(other.transform).with_flipped(other.flipped)
+    n_other, other_found = doors(other, other_mesh)
+    log.debug("up in doubt (sign evidence %.2f): %d doors this way up, %d the other", orientation.gravity.sign_evidence, n_here, n_other)
+    by_doors = lambda o: replace(o, gravity=replace(o.gravity, sign_by="doors"))  # noqa: E731
+    if n_other > 2 * n_here:
+        return by_doors(other), other_mesh, other_found
+    if n_here > 2 * n_other:
+        return by_doors(orientation), plan_mesh, found
+    return orientation, plan_mesh, found
+
+
 def compute(
     mesh: Mesh,
     stats: LoadStats,
@@ -179,11 +219,14 @@ def compute(
         check_not_flat(mesh)
         orientation = orient(mesh, options.orient)
         plan_mesh = mesh.transformed(orientation.transform).with_flipped(orientation.flipped)
+        found = None
+        if _up_in_doubt(orientation, options):
+            orientation, plan_mesh, found = _up_by_doors(mesh, orientation, plan_mesh, options)
         plan_annotations = annotations.transformed(orientation.transform)
     with timer.stage("walls"):
-        walls = find_flat_walls(plan_mesh, orientation, options.walls)
+        walls = found[0] if found else find_flat_walls(plan_mesh, orientation, options.walls)
     with timer.stage("rooms"):
-        openings = find_openings(plan_mesh, orientation, walls, options.plan)
+        openings = found[1] if found else find_openings(plan_mesh, orientation, walls, options.plan)
         rooms = find_rooms(plan_mesh, orientation, walls, options.plan, options.orient.slab_tolerance_m)
         physical = physical_walls(walls, options.walls.max_wall_thickness_m, options.walls.default_wall_thickness_m)
     with timer.stage("slice_draw"):

@@ -69,6 +69,7 @@ def plan_document(result: Result) -> dict[str, Any]:
         "gravity": {
             "method": o.gravity.method,
             "sign_evidence": round(float(o.gravity.sign_evidence), 3),
+            "sign_by": o.gravity.sign_by,
             "faces_used": int(o.gravity.faces_used),
         },
         "input": {

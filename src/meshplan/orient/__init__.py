@@ -116,7 +116,7 @@ def _check_floor(normals: FloatArray, heights: FloatArray, areas: FloatArray, fl
         )
 
 
-def orient(mesh: Mesh, params: OrientParams | None = None) -> Orientation:
+def orient(mesh: Mesh, params: OrientParams | None = None, up_hint: FloatArray | None = None) -> Orientation:
     """Level the mesh, find its floors, ceilings and stories, and turn its walls onto the axes.
 
     Parameters
@@ -125,6 +125,10 @@ def orient(mesh: Mesh, params: OrientParams | None = None) -> Orientation:
         The scan in input coordinates, metres.
     params
         Orientation parameters; the paper's defaults when omitted.
+    up_hint
+        A rough up direction in input coordinates, to use instead of searching for one (see
+        :func:`meshplan.pipeline.compute`, which tries the other way up when the scan says
+        little about it).
 
     Raises
     ------
@@ -133,7 +137,7 @@ def orient(mesh: Mesh, params: OrientParams | None = None) -> Orientation:
     """
     params = params or OrientParams()
     _check_scale(mesh, params)
-    gravity = estimate_gravity(mesh, params)
+    gravity = estimate_gravity(mesh, params, up_hint)
     areas = mesh.face_areas
 
     def level(up):

@@ -51,6 +51,9 @@ _AXES = {
 #: partition), not the two sides of a corridor.
 _SAME_SLAB_M = 0.5
 
+#: Horizontal clutter area (m2) added to both halves of a story before comparing them.
+_CLUTTER_FLOOR_M2 = 0.5
+
 #: Plan cell size (m) of the occupancy test deciding the sign of up.
 _OCCUPANCY_CELL_M = 0.1
 
@@ -76,6 +79,7 @@ class GravityEstimate:
     sign_evidence: float  # log-ratio of bottom to top occupancy; positive supports ``up``
     candidates: tuple[Candidate, ...]
     faces_used: int  # faces in the final cone of Method 2 (0 for Method 1)
+    sign_by: str = "furniture"  # what decided up from down: furniture, doors, file axes, up option
 
 
 def _story_intervals(h: FloatArray, horiz: np.ndarray, areas: FloatArray, params: OrientParams) -> list[tuple[float, float]]:
@@ -130,7 +134,9 @@ def sign_evidence(centroids: FloatArray, normals: FloatArray, areas: FloatArray,
         mid = horiz & (th > 0.05) & (th < 0.95)
         clutter[0] += areas[mid & (th < 0.5)].sum()
         clutter[1] += areas[mid & (th >= 0.5)].sum()
-    eps = 0.01 * max(clutter.sum(), 1e-6)
+    # a few door heads and window sills (well under a square metre) must not outvote the walls:
+    # clutter counts once it is more than a small table top
+    eps = max(0.01 * clutter.sum(), _CLUTTER_FLOOR_M2)
     return float(np.log((occ[0] + 1.0) / (occ[1] + 1.0)) + np.log((clutter[0] + eps) / (clutter[1] + eps)))
 
 
@@ -208,8 +214,11 @@ def _bbox_axis(mesh: Mesh) -> FloatArray:
     return unit(rot[:, int(np.argmin(extents))])
 
 
-def estimate_gravity(mesh: Mesh, params: OrientParams) -> GravityEstimate:
+def estimate_gravity(mesh: Mesh, params: OrientParams, up_hint: FloatArray | None = None) -> GravityEstimate:
     """The up direction of ``mesh`` in its own coordinates.
+
+    ``up_hint``, a rough up direction (input coordinates), replaces the search for the axis and
+    its sign; it is refined all the same.
 
     Raises
     ------
@@ -218,9 +227,13 @@ def estimate_gravity(mesh: Mesh, params: OrientParams) -> GravityEstimate:
     """
     normals, areas, centroids = mesh.face_normals, mesh.face_areas, mesh.face_centroids
     candidates: list[Candidate] = []
-    if params.up != "auto":
+    sign_by = "furniture"
+    if up_hint is not None:
+        rough = unit(np.asarray(up_hint, dtype=np.float64))
+        evidence, sign_by = 0.0, "hint"
+    elif params.up != "auto":
         rough = np.array(_AXES[params.up])
-        evidence = 0.0
+        evidence, sign_by = 0.0, "up option"
     else:
         peaks = axial_peaks(normals, areas, count=6)
         if not peaks:
@@ -240,15 +253,15 @@ def estimate_gravity(mesh: Mesh, params: OrientParams) -> GravityEstimate:
             # no evidence either way: follow the file's convention (its nearest axis points up)
             k = int(np.argmax(np.abs(axis)))
             rough = axis if axis[k] > 0 else -axis
-            evidence = 0.0
+            evidence, sign_by = 0.0, "file axes"
         else:
             rough = axis if evidence > 0 else -axis
             evidence = abs(evidence)
     if params.gravity_method == "bbox":
         axis = _bbox_axis(mesh)
         up = axis if axis @ rough >= 0 else -axis
-        return GravityEstimate(up, "bbox", unit(rough), up, evidence, tuple(candidates), 0)
-    if params.up == "auto":
+        return GravityEstimate(up, "bbox", unit(rough), up, evidence, tuple(candidates), 0, sign_by)
+    if params.up == "auto" and up_hint is None:
         up = rough  # already refined; only its sign was decided since
     else:
         up, used = _refine_kmeans(normals, areas, rough, params.gravity_cones_deg)
@@ -257,7 +270,7 @@ def estimate_gravity(mesh: Mesh, params: OrientParams) -> GravityEstimate:
             f"no floor found: no surface faces within {params.gravity_cones_deg[0]:.0f} degrees of the up axis {np.round(rough, 3).tolist()}",
             "check --up, or that the scan includes the floor",
         )
-    return GravityEstimate(up, "kmeans", unit(rough), up, evidence, tuple(candidates), used)
+    return GravityEstimate(up, "kmeans", unit(rough), up, evidence, tuple(candidates), used, sign_by)
 
 
 def refine_with_slabs(
