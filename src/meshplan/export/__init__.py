@@ -80,13 +80,13 @@ def _model_files(result: Result, story: int) -> dict[str, bytes]:
     }
 
 
-def _jobs(result: Result) -> list[tuple]:
-    """``(function, *arguments)`` of every file but the 3D models and the report, slowest first:
-    the drawings (the paper's slicing and drawing), then the DXF files."""
+def _jobs(result: Result) -> tuple[list[tuple], list[tuple]]:
+    """``(function, *arguments)`` of the drawings (the paper's slicing and drawing), slowest
+    first, and of the DXF files: every file but the 3D models and the report."""
     o, mesh, params = result.orientation, result.mesh, result.options.render
     n = len(result.stories)
     jobs: list[tuple] = []
-    later: list[tuple] = []
+    dxf: list[tuple] = []
     for sp in result.stories:
         i = sp.story.index
         sheet = make_sheet(mesh.face_centroids[o.face_story == i][:, [0, 2]], params)
@@ -97,9 +97,9 @@ def _jobs(result: Result) -> list[tuple]:
         faces = np.flatnonzero(o.face_story == i)
         reference = slice_mesh(mesh.triangles[faces], np.array([sp.drafting.height])).segments
         rooms = [r for r in result.rooms if r.story == i]
-        later.append((_dxf_files, i, sp.drafting.slices.segments, reference, sp.annotations, symbols, rooms))
+        dxf.append((_dxf_files, i, sp.drafting.slices.segments, reference, sp.annotations, symbols, rooms))
     jobs += [(_normals_files, mesh.face_normals, mesh.face_areas, o), (_levels_files, o, params)]
-    return jobs + later
+    return jobs, dxf
 
 
 def _call(job: tuple) -> dict[str, bytes]:
@@ -212,10 +212,9 @@ def render_files(result: Result, timer: _Timer | None = None, pool: RenderPool |
         if pool is None:
             pool = stack.enter_context(RenderPool(_processes(result.options.render)))
         with stage("slice_draw"):
-            jobs = _jobs(result)
-            n_draw = sum(job[0] not in (_dxf_files,) for job in jobs)
-            pending = _submit(pool, jobs)
-            for job, future in zip(jobs[:n_draw], pending[:n_draw]):
+            drawings, dxf = _jobs(result)
+            pending = _submit(pool, drawings + dxf)
+            for job, future in zip(drawings, pending):
                 files.update(_result(job, future))
         with stage("write"):
             if result.options.export.ifc:
@@ -225,7 +224,7 @@ def render_files(result: Result, timer: _Timer | None = None, pool: RenderPool |
             for sp in result.stories:
                 files.update(_model_files(result, sp.story.index))
             files["oriented.glb"] = glb_bytes(result.mesh, result.annotations, "scan")
-            for job, future in zip(jobs[n_draw:], pending[n_draw:]):
+            for job, future in zip(dxf, pending[len(drawings) :]):
                 files.update(_result(job, future))
             # last: the report inlines the other files
             files["report.html"] = report_html(result, files).encode("utf-8")

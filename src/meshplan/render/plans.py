@@ -34,18 +34,14 @@ def pen_and_ink_raster(plan: PenAndInkPlan, sheet: Sheet, params: RenderParams) 
     return ink_rgba(counts, params.opacity)
 
 
-def pen_and_ink_figure(
-    plan: PenAndInkPlan, annotations: Annotations, sheet: Sheet, params: RenderParams, n_stories: int = 1, ink: np.ndarray | None = None
-):
-    """All slices overlaid in translucent ink; what stands at many heights is dark.
-
-    ``ink`` is the image of :func:`pen_and_ink_raster`, computed here when not given.
-    """
+def pen_and_ink_figure(plan: PenAndInkPlan, annotations: Annotations, sheet: Sheet, params: RenderParams, n_stories: int = 1):
+    """All slices overlaid in translucent ink (:func:`pen_and_ink_raster`); what stands at many
+    heights is dark. One figure serves every format it is saved in."""
     s = plan.story
     n = len(plan.slices.heights) - 1
     fig, ax = new_figure(sheet, _story_title(f"Pen-and-ink ({n} slices, opacity {params.opacity:g})", s.index, n_stories, s.floor, s.ceiling, params.imperial), params)
     ax.patch.set_alpha(0.0)  # the ink sits under the axes
-    place_raster(fig, ax, ink if ink is not None else pen_and_ink_raster(plan, sheet, params))
+    place_raster(fig, ax, pen_and_ink_raster(plan, sheet, params))
     draw_annotations(ax, annotations.labels, annotations.kinds, annotations.positions, annotations.directions)
     draw_scale_bar(fig, sheet, params)
     return fig
