@@ -4,7 +4,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed-stamp
 
-.PHONY: demo test bench clean lint browser
+.PHONY: demo test bench clean lint browser smoke
 
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -25,8 +25,13 @@ browser:
 	    { apt-get update -q >/dev/null 2>&1 && DEBIAN_FRONTEND=noninteractive apt-get install -y -q chromium >/dev/null 2>&1; }; }; } || \
 	  echo "Chromium could not be installed: the browser tests will be skipped"
 
-test: $(STAMP) browser
+test: $(STAMP) browser smoke
 	$(BIN)/python -m pytest -n 2 -q tests
+
+# A plain `pip install meshplan` (the wheel and its declared dependencies, no extras) in a new
+# bare virtual environment: --version, synth and run must work there.
+smoke: $(STAMP)
+	PYTHON=$(BIN)/python bash scripts/smoke-install.sh
 
 bench: $(STAMP)
 	$(BIN)/python benchmarks/bench.py

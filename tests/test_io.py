@@ -185,6 +185,7 @@ def test_staged_directory_failures_leave_nothing(tmp_path):
 
     from meshplan.errors import OutputError
     from meshplan.io import staged_directory
+    from meshplan.io.atomic import KIND_PLANS, write_stamp
 
     target = tmp_path / "new" / "deeper" / "out"
     with pytest.raises(OutputError) as info:
@@ -199,11 +200,13 @@ def test_staged_directory_failures_leave_nothing(tmp_path):
     previous = tmp_path / "previous"
     previous.mkdir()
     (previous / "plan.json").write_text("old")
+    write_stamp(previous, KIND_PLANS)
     with pytest.raises(RuntimeError):
         with staged_directory(previous, force=True) as tmp:
             (tmp / "plan.json").write_text("new")
             raise RuntimeError("a bug while writing")
     assert [p.name for p in tmp_path.iterdir()] == ["previous"] and (previous / "plan.json").read_text() == "old"
+    assert sorted(p.name for p in previous.iterdir()) == [".meshplan", "plan.json"]
 
 
 def test_leftovers_of_a_killed_run_are_cleaned_up(tmp_path):

@@ -147,11 +147,15 @@ def _check_message(name: str, code: int, err: str, words: tuple[str, str], statu
     assert words[1].lower() in hint.lower(), (name, "what to do", err)
 
 
+from meshplan.io.atomic import KIND_PLANS, write_stamp  # noqa: E402
+
+
 def _previous_result(path: Path) -> dict[str, str]:
     """A stand-in for the result of an earlier run (a failing run must not touch it)."""
     path.mkdir(parents=True)
     (path / "plan.json").write_text('{"previous": true}\n')
     (path / "drafting-0.png").write_bytes(b"\x89PNG previous")
+    write_stamp(path, KIND_PLANS)  # meshplan's own, so --force may replace it
     return _tree(path)
 
 

@@ -16,7 +16,6 @@ from enum import Enum
 from pathlib import Path
 from typing import Any, Optional
 
-import click
 import typer
 
 from . import __version__
@@ -290,7 +289,7 @@ def batch(
         print_batch_summary(summary)
     if quiet:
         for row in summary.failed:
-            click.echo(f"error: {row.scan}: {row.error}", err=True)
+            typer.echo(f"error: {row.scan}: {row.error}", err=True)
     if summary.failed:  # exit status 1 (main() prints the message)
         raise ScansFailed(f"{len(summary.failed)} of {len(summary.rows)} scans failed", f"see {output / 'summary.csv'}")
 
@@ -304,12 +303,10 @@ def _options(settings: list[str], **given: Any) -> dict[str, Any]:
 
 
 def _usage_error_types() -> tuple[type[BaseException], ...]:
-    """Command-line usage errors of typer (which ships its own copy of click) and of click."""
-    types: list[type[BaseException]] = [click.ClickException]
-    for name in ("TyperException",):
-        if hasattr(typer, name):
-            types.append(getattr(typer, name))
-    return tuple(types)
+    """Command-line usage errors of typer, which ships its own copy of click (from 0.29 on:
+    ``typer.TyperException`` is the base of its ``ClickException``); plain click is not a
+    dependency of meshplan, so it is not imported."""
+    return (typer.TyperException,)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -317,27 +314,27 @@ def main(argv: list[str] | None = None) -> int:
     try:
         status = app(args=argv, prog_name="meshplan", standalone_mode=False)
     except MeshplanError as exc:
-        click.echo(f"error: {exc.message}", err=True)
+        typer.echo(f"error: {exc.message}", err=True)
         return exc.exit_code
-    except (typer.Exit, click.exceptions.Exit) as exc:
+    except typer.Exit as exc:
         return int(getattr(exc, "exit_code", 0) or 0)
-    except (KeyboardInterrupt, typer.Abort, click.exceptions.Abort):
-        click.echo("error: interrupted; nothing was written", err=True)
+    except (KeyboardInterrupt, typer.Abort):
+        typer.echo("error: interrupted; nothing was written", err=True)
         return 130
     except _usage_error_types() as exc:
         if type(exc).__name__.startswith("NoArgsIsHelp"):
             ctx = getattr(exc, "ctx", None)
-            click.echo(ctx.get_help() if ctx is not None else "usage: meshplan COMMAND --help")
+            typer.echo(ctx.get_help() if ctx is not None else "usage: meshplan COMMAND --help")
             return 0
         message = exc.format_message() if hasattr(exc, "format_message") else str(exc)
         message = " ".join(str(message).split()).replace("Value error, ", "").rstrip(".")
         ctx = getattr(exc, "ctx", None)
         cmd = ctx.command_path if ctx is not None else "meshplan"
-        click.echo(f"error: {message}; see '{cmd} --help'", err=True)
+        typer.echo(f"error: {message}; see '{cmd} --help'", err=True)
         return 2
     except MemoryError:
         # the up-front estimate (io.mesh.BYTES_PER_FACE) was too low, or --max-faces overrode it
-        click.echo("error: ran out of memory while processing the scan; decimate the scan or free memory, "
+        typer.echo("error: ran out of memory while processing the scan; decimate the scan or free memory, "
                    "and leave --max-faces unset so that such scans are refused up front", err=True)
         return 2
     except Exception as exc:  # a bug in meshplan: still one line; the traceback with -v
@@ -346,11 +343,11 @@ def main(argv: list[str] | None = None) -> int:
 
             traceback.print_exc()
         detail = " ".join(str(exc).split())[:200]
-        click.echo(f"error: internal error ({type(exc).__name__}{': ' + detail if detail else ''}); "
+        typer.echo(f"error: internal error ({type(exc).__name__}{': ' + detail if detail else ''}); "
                    "please report this bug in meshplan with the scan and the command (add -v for the traceback)", err=True)
         return 1
     if status == 130:  # typer turns Ctrl-C into Exit(130), which it returns outside standalone mode
-        click.echo("error: interrupted; nothing was written", err=True)
+        typer.echo("error: interrupted; nothing was written", err=True)
     return status if isinstance(status, int) else 0
 
 

@@ -329,7 +329,8 @@ def run(
     elif params:
         raise TypeError("give either options or keyword parameters, not both")
     if output is not None:
-        check_output_dir(output, force)
+        # the scan and the annotations must survive a --force that names their directory
+        check_output_dir(output, force, protect=(scan, annotations))
     timer = _Timer(progress)
     t0 = time.perf_counter()
     # the drawing workers start now and get ready while the stages compute

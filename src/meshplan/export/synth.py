@@ -9,6 +9,7 @@ import numpy as np
 
 from ..errors import ParameterError
 from ..io import staged_directory
+from ..io.atomic import KIND_SYNTHETIC
 from ..io.annotations import annotations_document
 
 SCAN_FORMATS = ("obj", "ply", "glb", "stl", "off")
@@ -45,7 +46,7 @@ def write_synthetic(scan, output: Path, fmt: str = "obj", force: bool = False) -
 
     if fmt not in SCAN_FORMATS:
         raise ParameterError(f"unknown scan format {fmt!r}", f"use one of {', '.join(SCAN_FORMATS)}")
-    with staged_directory(output, force=force) as tmp:
+    with staged_directory(output, force=force, kind=KIND_SYNTHETIC) as tmp:
         name = f"scan.{fmt}"
         if fmt == "obj":
             (tmp / name).write_text(obj_text(scan.mesh.vertices, scan.mesh.faces, scan.face_groups, scan.group_names))
