@@ -288,3 +288,34 @@ def _same_as_one_process(first: Path, out: Path) -> None:
             name = Path(r["output"]).name
             assert {p.name for p in (out / name).iterdir()} == {p.name for p in (first / name).iterdir()}
             assert _plan(out / name) == _plan(first / name)
+
+
+def test_exclude_patterns_and_annotation_pattern(scans, tmp_path, capsys):
+    """``--exclude`` drops files that only look like scans (the bad .ply here, the HoloLens 2
+    ``*.su_planes.ply`` sidecars in real exports); ``--annotations`` names each scan's
+    annotations by a pattern, and options of ``run`` (``--slices``, ``--scale``) reach every scan."""
+    from meshplan.batch import find_annotations, find_scans
+
+    assert [p.name for p in find_scans(scans, skip=["*.ply"])] == ["scan.obj", "scan.obj"]
+    assert [p.parent.name for p in find_scans(scans, skip=["*/r1/*"])] == ["scans", "r0", "r2"]
+    assert find_scans(scans / BAD, skip=[BAD]) == []
+    r0 = scans / "r0" / "scan.obj"
+    assert find_annotations(r0) == scans / "r0" / "annotations.json"
+    assert find_annotations(r0, "{stem}-sensors.json") is None
+    assert find_annotations(r0, "../r1/annotations.json") == scans / "r0" / ".." / "r1" / "annotations.json"
+
+    out = tmp_path / "out"
+    capsys.readouterr()
+    code = main(["batch", str(scans), "-o", str(out), "--quiet", "-x", BAD, "--exclude", "*/r2/*",
+                 "--slices", "7", "--scale", "50", "-a", "{stem}-missing.json"])
+    assert code == 0, capsys.readouterr().err
+    rows = _csv(out)
+    assert [Path(r["scan"]).parent.name for r in rows] == ["r0", "r1"] and all(r["status"] == "ok" for r in rows)
+    for r in rows:
+        plan = json.loads((Path(r["output"]) / "plan.json").read_text())
+        assert plan["parameters"]["plan"]["slices"] == 7 and plan["parameters"]["render"]["scale"] == 50
+        assert plan["annotations"] == [] or not plan["annotations"]  # the pattern names no file
+    # everything excluded: a usage error in one line
+    assert main(["batch", str(scans), "-o", str(tmp_path / "none"), "-x", "*"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("error: ") and len(err.splitlines()) == 1

@@ -64,6 +64,7 @@ from __future__ import annotations
 
 import contextlib
 import csv
+import fnmatch
 import glob
 import io
 import json
@@ -148,7 +149,16 @@ def _inside(path: Path, folder: Path | None) -> bool:
         return False
 
 
-def find_scans(spec: str | os.PathLike, *, exclude: str | os.PathLike | None = None) -> list[Path]:
+def _excluded(path: Path, patterns: Sequence[str]) -> bool:
+    """Whether ``path`` matches one of the glob ``patterns``, by its file name
+    (``*.su_planes.ply``) or by its whole path (``*/old/*``)."""
+    text = path.as_posix()
+    return any(fnmatch.fnmatch(path.name, pat) or fnmatch.fnmatch(text, pat) for pat in patterns)
+
+
+def find_scans(
+    spec: str | os.PathLike, *, exclude: str | os.PathLike | None = None, skip: Sequence[str] = ()
+) -> list[Path]:
     """The scan files a batch input names.
 
     Parameters
@@ -159,6 +169,10 @@ def find_scans(spec: str | os.PathLike, *, exclude: str | os.PathLike | None = N
         are kept), or a single mesh file.
     exclude
         A directory whose contents are never taken as scans (the batch's output directory).
+    skip
+        Glob patterns of files that are not scans although they have a mesh extension, matched
+        against the file name or the path (e.g. ``*.su_planes.ply``, the HoloLens 2 plane
+        sidecars).
 
     Returns
     -------
@@ -180,7 +194,7 @@ def find_scans(spec: str | os.PathLike, *, exclude: str | os.PathLike | None = N
             # skip hidden directories (e.g. half-written results) and the batch's own output
             dirs[:] = sorted(d for d in dirs if not d.startswith(".") and not _inside(Path(root, d), excl))
             found.extend(Path(root, f) for f in files if not f.startswith(".") and _mesh_file(Path(f)))
-        found = sorted(p for p in found if not _inside(p, excl))
+        found = sorted(p for p in found if not _inside(p, excl) and not _excluded(p, skip))
         if not found:
             raise MeshplanError(
                 f"{text}: no scan files ({_formats()}) in this directory or below",
@@ -188,12 +202,14 @@ def find_scans(spec: str | os.PathLike, *, exclude: str | os.PathLike | None = N
             )
         return found
     if path.is_file():
+        if _excluded(path, skip):
+            return []
         if not _mesh_file(path):
             raise MeshplanError(f"{text}: not a mesh file ({_formats()})", "give a directory of scans, a glob pattern or a mesh file")
         return [path]
     if glob.has_magic(text):
         matches = sorted({Path(m) for m in glob.glob(text, recursive=True)})
-        found = [p for p in matches if p.is_file() and _mesh_file(p) and not _inside(p, excl)]
+        found = [p for p in matches if p.is_file() and _mesh_file(p) and not _inside(p, excl) and not _excluded(p, skip)]
         if not found:
             what = f"matches {len(matches)} files but none is a scan ({_formats()})" if matches else "matches no file"
             raise MeshplanError(f"{text!r} {what}", "check the pattern (quote it so that the shell does not expand it)")
@@ -201,10 +217,30 @@ def find_scans(spec: str | os.PathLike, *, exclude: str | os.PathLike | None = N
     raise MeshplanError(f"{text}: no such directory or file", "give a directory of scans or a glob pattern such as 'scans/**/*.obj'")
 
 
-def find_annotations(scan: str | os.PathLike) -> Path | None:
-    """The annotations of a scan: ``<stem>.annotations.json`` beside it, else ``annotations.json``."""
+#: Where a scan's annotations are looked for when no pattern is given, in this order.
+DEFAULT_ANNOTATION_PATTERNS = ("{stem}.annotations.json", "annotations.json")
+
+
+def find_annotations(scan: str | os.PathLike, pattern: str | None = None) -> Path | None:
+    """The annotations of a scan.
+
+    Parameters
+    ----------
+    scan
+        The scan file.
+    pattern
+        A file name or path relative to the scan's directory in which ``{stem}`` stands for the
+        scan's file name without its extension (``{stem}-sensors.json``, ``../ann/{stem}.json``).
+        ``None``: ``<stem>.annotations.json`` beside the scan, else ``annotations.json``.
+
+    Returns
+    -------
+    Path or None
+        The first candidate that is a file, or ``None``.
+    """
     p = Path(scan)
-    for candidate in (p.with_name(f"{p.stem}.annotations.json"), p.with_name("annotations.json")):
+    patterns = DEFAULT_ANNOTATION_PATTERNS if pattern is None else (pattern,)
+    for candidate in (p.parent / pat.replace("{stem}", p.stem) for pat in patterns):
         if candidate.is_file():
             return candidate
     return None

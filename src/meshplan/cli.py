@@ -258,10 +258,23 @@ def batch(
     slices: Optional[int] = typer.Option(None, "--slices", help=_d("slices", "Slicing intervals of the pen-and-ink plan (n + 1 planes).")),
     imperial: Optional[bool] = typer.Option(None, "--imperial/--metric", help=_d("imperial", "Scale bars and areas in feet (or metres).")),
     dpi: Optional[int] = typer.Option(None, "--dpi", help=_d("dpi", "PNG resolution (dots per inch).")),
+    scale: Optional[int] = typer.Option(None, "--scale", help=_d("scale", "Drawing scale 1:N (0 = automatic).")),
+    opacity: Optional[float] = typer.Option(None, "--opacity", help=_d("opacity", "Opacity of each pen-and-ink slice.")),
+    drafting_height: Optional[float] = typer.Option(None, "--drafting-height", help=_d("drafting_height_m", "Cut height of the drafting plan above the floor (m).")),
+    default_ceiling_height: Optional[float] = typer.Option(None, "--default-ceiling-height", help=_d("default_ceiling_height_m", "Ceiling height assumed when none is scanned (m).")),
+    ifc: bool = typer.Option(False, "--ifc", help="Also write model.ifc for every scan (IFC4; needs the ifc extra)."),
+    annotations: Optional[str] = typer.Option(
+        None, "--annotations", "-a",
+        help="Annotations of each scan, relative to its directory, {stem} standing for the scan's name (e.g. '{stem}-sensors.json') [default: <stem>.annotations.json, else annotations.json].",
+    ),
+    exclude: list[str] = typer.Option(
+        [], "--exclude", "-x", help="Glob pattern of files that are not scans, on the name or the path (repeatable; e.g. '*.su_planes.ply')."
+    ),
     max_faces: Optional[int] = typer.Option(None, "--max-faces", help="Refuse larger scans [default: what fits in memory]."),
     set_: list[str] = typer.Option([], "--set", help="Any other parameter, NAME=VALUE (see plan.json 'parameters')."),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="Print nothing but the failed scans' errors."),
     as_json: bool = typer.Option(False, "--json", help="Print the summary as JSON on stdout."),
+    verbose: int = typer.Option(0, "--verbose", "-v", count=True, help="Debug logging (-vv: also the libraries')."),
 ) -> None:
     """Run many scans, one output directory each, and summarize them.
 
@@ -273,11 +286,27 @@ def batch(
     """
     from .batch import BatchInterrupted, BatchProgress, ScansFailed, find_annotations, find_scans, print_batch_summary, run_batch
 
-    _setup_logging(0, quiet)
-    params = _options(set_, units=units, up=up, gravity_method=gravity, slices=slices, imperial=imperial, dpi=dpi, max_faces=max_faces)
+    _setup_logging(verbose, quiet)
+    params = _options(
+        set_,
+        units=units,
+        up=up,
+        gravity_method=gravity,
+        slices=slices,
+        imperial=imperial,
+        dpi=dpi,
+        scale=scale,
+        opacity=opacity,
+        drafting_height_m=drafting_height,
+        default_ceiling_height_m=default_ceiling_height,
+        max_faces=max_faces,
+        ifc=ifc or None,
+    )
     # several inputs (e.g. an unquoted glob the shell expanded) are concatenated, duplicates dropped
-    scans = list(dict.fromkeys(p for spec in inputs for p in find_scans(spec, exclude=output)))
-    jobs = [(s, find_annotations(s)) for s in scans]
+    scans = list(dict.fromkeys(p for spec in inputs for p in find_scans(spec, exclude=output, skip=exclude)))
+    if not scans:
+        raise MeshplanError(f"every scan given matches --exclude ({', '.join(exclude)})", "check the inputs and the --exclude patterns")
+    jobs = [(s, find_annotations(s, annotations)) for s in scans]
     try:
         with BatchProgress(enabled=not quiet and not as_json) as bar:
             summary = run_batch(jobs, output, workers=workers, scheduler=scheduler, force=force, progress=bar.update, **params)
