@@ -26,7 +26,7 @@ browser:
 	  echo "Chromium could not be installed: the browser tests will be skipped"
 
 test: $(STAMP) browser smoke
-	$(BIN)/python -m pytest -n 2 -q tests
+	$(BIN)/python -m pytest -n 2 -q --doctest-modules src/meshplan tests
 
 # A plain `pip install meshplan` (the wheel and its declared dependencies, no extras) in a new
 # bare virtual environment: --version, synth and run must work there.
@@ -38,3 +38,9 @@ bench: $(STAMP)
 
 clean:
 	rm -rf demo-out bench-out meshplan-out .pytest_cache .hypothesis
+
+# Every real scan in ../shared/scans through meshplan run (2 at once), scored against
+# ../shared/truth: a contact sheet per scan and summary.md/summary.json in gallery-out/.
+.PHONY: gallery
+gallery: $(STAMP)
+	$(BIN)/python scripts/gallery.py --scans ../shared/scans --truth ../shared/truth --output gallery-out --workers 2
