@@ -37,7 +37,7 @@ bench: $(STAMP)
 	$(BIN)/python benchmarks/bench.py
 
 clean:
-	rm -rf demo-out bench-out meshplan-out .pytest_cache .hypothesis
+	rm -rf demo-out bench-out meshplan-out gallery-out .pytest_cache .hypothesis
 
 # Every real scan in ../shared/scans through meshplan run (2 at once), scored against
 # ../shared/truth: a contact sheet per scan and summary.md/summary.json in gallery-out/.

@@ -91,8 +91,13 @@ def _parse_set(items: list[str]) -> dict[str, Any]:
         name, value = item.split("=", 1)
         try:
             parsed = json.loads(value)
-        except json.JSONDecodeError:
+        except json.JSONDecodeError:  # a word: the parameter's validator says whether it fits
             parsed = value
+        except (ValueError, RecursionError):  # a number of over 4,300 digits, lists nested too deep
+            raise ParameterError(
+                f"--set {name.strip()}: the value cannot be read (nested too deeply, or a number of more than 4,300 digits)",
+                "give a number, true/false, a word or a short list",
+            ) from None
         out[name.strip().replace("-", "_")] = tuple(parsed) if isinstance(parsed, list) else parsed
     return out
 

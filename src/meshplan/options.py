@@ -11,16 +11,27 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, ClassVar
 
 from .errors import ParameterError
-from .io.mesh import check_units
+from .io.mesh import UNITS_M
 from .orient.params import OrientParams
 from .plan.params import PlanParams
 from .render.params import RenderParams
+from .validation import (
+    Boolean,
+    Constraint,
+    Integer,
+    Optional,
+    Options,
+    describe,
+    unknown_name,
+    validated,
+)
 from .walls.params import WallParams
 
 
+@validated
 @dataclass(frozen=True)
 class InputParams:
     """How the input is read.
@@ -34,15 +45,17 @@ class InputParams:
         the available memory.
     """
 
+    _parameter_constraints: ClassVar[dict[str, Constraint]] = {
+        "units": Options(tuple(UNITS_M)),
+        # no upper bound: max_faces is how a user overrides the memory estimate on purpose
+        "max_faces": Optional(Integer(1, None)),
+    }
+
     units: str = "m"
     max_faces: int | None = None
 
-    def __post_init__(self) -> None:
-        check_units(self.units)
-        if self.max_faces is not None and (not isinstance(self.max_faces, int) or self.max_faces <= 0):
-            raise ParameterError(f"max_faces must be a positive integer, got {self.max_faces!r}", "pass --max-faces N")
 
-
+@validated
 @dataclass(frozen=True)
 class ExportParams:
     """Optional outputs.
@@ -52,6 +65,8 @@ class ExportParams:
     ifc
         Also write ``model.ifc`` (IFC4; needs the ``ifc`` extra, ifcopenshell).
     """
+
+    _parameter_constraints: ClassVar[dict[str, Constraint]] = {"ifc": Boolean()}
 
     ifc: bool = False
 
@@ -77,6 +92,13 @@ class RunOptions:
     render: RenderParams = field(default_factory=RenderParams)
     export: ExportParams = field(default_factory=ExportParams)
 
+    def __post_init__(self) -> None:
+        # RunOptions(orient={...}) would otherwise fail deep inside a stage
+        for group, klass in _GROUPS.items():
+            value = getattr(self, group)
+            if not isinstance(value, klass):
+                raise ParameterError(f"{group} must be a {klass.__name__}, got {describe(value)}", f"pass {group}={klass.__name__}(...)")
+
     @classmethod
     def names(cls) -> dict[str, str]:
         """Every flat option name and the group that owns it."""
@@ -101,16 +123,13 @@ class RunOptions:
         grouped: dict[str, dict[str, Any]] = {g: {} for g in _GROUPS}
         for key, value in options.items():
             if key not in names:
-                close = [n for n in names if n.startswith(key[:4])]
-                raise ParameterError(
-                    f"unknown option {key!r}", f"did you mean {close[0]!r}?" if close else "see meshplan run --help"
-                )
+                raise unknown_name(key, list(names), "option", "see meshplan run --help")
+            # None means "not given" (the CLI passes every option), except for max_faces, whose
+            # None is a value of its own (no limit)
             if value is not None or key == "max_faces":
                 grouped[names[key]][key] = value
-        try:
-            return cls(**{g: _GROUPS[g](**kw) for g, kw in grouped.items()})
-        except TypeError as exc:  # wrong type for a field
-            raise ParameterError(str(exc), "check the option values") from None
+        # every value is checked by the constraints of the stage that owns it (meshplan.validation)
+        return cls(**{g: _GROUPS[g](**kw) for g, kw in grouped.items()})
 
     def to_dict(self) -> dict[str, dict[str, Any]]:
         """All parameters, grouped by stage (JSON-ready)."""

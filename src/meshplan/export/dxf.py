@@ -12,6 +12,7 @@ import numpy as np
 
 from ..geometry import Annotations
 from ..slicing import chain_segments
+from ..validation import plain_text
 
 LAYERS = {
     "WALLS": 7,  # white/black
@@ -69,7 +70,7 @@ def drafting_dxf(
         if np.all(np.isfinite(d)) and np.hypot(d[0], d[2]) > 1e-6:
             n = np.hypot(d[0], d[2])
             msp.add_line(c, (c[0] + 0.4 * d[0] / n, c[1] - 0.4 * d[2] / n), dxfattribs={"layer": "ANNOTATIONS"})
-        msp.add_text(f"{label} ({kind})", height=0.12, dxfattribs={"layer": "TEXT"}).set_placement((c[0] + 0.1, c[1] + 0.1))
+        msp.add_text(_literal_text(f"{label} ({kind})"), height=0.12, dxfattribs={"layer": "TEXT"}).set_placement((c[0] + 0.1, c[1] + 0.1))
     for room in rooms:
         pts = [_p(c) for c in list(room.polygon.exterior.coords)[:-1]]
         msp.add_lwpolyline(pts, close=True, dxfattribs={"layer": "ROOMS"})
@@ -94,6 +95,17 @@ def drafting_dxf(
         pts = np.concatenate([np.asarray(wall_segments).reshape(-1, 2), np.asarray(slice_segments).reshape(-1, 2), np.zeros((1, 2))])
         msp.add_text(title, height=0.25, dxfattribs={"layer": "TEXT"}).set_placement((float(pts[:, 0].min()), float(-pts[:, 1].min()) + 0.5))
     return _reproducible_bytes(doc)
+
+
+def _literal_text(text: str) -> str:
+    """A user's text as the content of a DXF TEXT entity that CAD programs show as it is.
+
+    Control characters are removed (a line break would end the DXF group value); ``^`` is
+    written ``^ `` (DXF's caret notation reads ``^J`` as a control character and ``^ `` as a
+    caret) and ``%`` as ``%%%`` (TEXT reads ``%%c``, ``%%d``, ``%%p`` as symbols, ``%%%`` as a
+    percent sign). At most 200 characters of label, tripled, stay within R2010's 2049.
+    """
+    return plain_text(text).replace("^", "^ ").replace("%", "%%%")
 
 
 def _required_class_names(dxfversion: str) -> set[str]:

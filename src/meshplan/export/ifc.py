@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..errors import MeshplanError
+from ..validation import plain_text
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..pipeline import Result
@@ -142,6 +143,10 @@ def ifc_bytes(result: Result) -> bytes:
     # annotations
     ann = result.annotations
     for i, (label, kind) in enumerate(zip(ann.labels, ann.kinds)):
+        # the user's text as it is, without the characters STEP cannot encode (lone surrogates)
+        # or IFC viewers choke on (NUL); never cut: labels are at most MAX_LABEL_CHARS (200),
+        # within IfcLabel's 255 characters
+        label = plain_text(label)
         story = int(result.annotation_story[i]) if len(result.annotation_story) else 0
         if kind in ("sensor", "thermostat"):
             el = root.create_entity(f, ifc_class="IfcSensor", name=label, predefined_type="TEMPERATURESENSOR" if kind == "thermostat" else "NOTDEFINED")

@@ -3,10 +3,22 @@
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass
+from typing import ClassVar
 
 from ..errors import ParameterError
-from ..geometry import check_positive
 from ..sphere import PAPER_TRIM_SCHEDULE_DEG
+from ..validation import (
+    MAX_LENGTH_M,
+    MAX_SCHEDULE_STEPS,
+    AnyOf,
+    Boolean,
+    Constraint,
+    Integer,
+    Numbers,
+    Options,
+    Real,
+    validated,
+)
 
 #: Accepted values of ``up``: ``auto`` or a signed input axis.
 UP_CHOICES = ("auto", "+x", "-x", "+y", "-y", "+z", "-z")
@@ -16,7 +28,37 @@ GRAVITY_METHODS = ("kmeans", "bbox")
 
 INCH_M = 0.0254
 
+#: Smallest bucket of the altitude histogram, in metres: 1 mm is finer than any scanner resolves
+#: (HoloLens 2 and phone LiDAR: about 1 cm), and the histogram has (height span / bucket) bins,
+#: so a bucket of 1e-300 m would ask for more bins than there are bytes.
+MIN_LEVEL_BUCKET_M = 0.001
 
+#: Largest bucket of the altitude histogram, in metres: a bucket taller than half a metre puts a
+#: floor, the furniture on it and a sunken floor into one spike.
+MAX_LEVEL_BUCKET_M = 0.5
+
+#: Largest story height in metres that can be asked for: taller than any atrium; beyond it the
+#: story search spans a range that only wrong units produce.
+MAX_STORY_HEIGHT_LIMIT_M = 100.0
+
+#: Most wall directions: each is one cluster of the spherical k-means; 16 already allows a wall
+#: every 11 degrees around the compass, more only splits one wall direction into several.
+MAX_WALL_CLUSTERS = 16
+
+_ANGLE = Real(0.0, 90.0, closed="neither", why="an angle from the vertical or from a direction")
+_FRACTION = Real(0.0, 1.0)
+_GAP = Real(0.0, MAX_LENGTH_M, why="lengths beyond 1 km are a unit mistake")
+_HEIGHT = Real(0.0, MAX_STORY_HEIGHT_LIMIT_M, closed="right", why="no story is taller than 100 m")
+_SCHEDULE = Numbers(
+    Real(0.0, 90.0, closed="neither"),
+    (1, MAX_SCHEDULE_STEPS),
+    order="decreasing",
+    what="a schedule of angles in degrees",
+    why="each angle is one k-means pass over every face",
+)
+
+
+@validated
 @dataclass(frozen=True)
 class OrientParams:
     """How the mesh is levelled, split into levels and turned onto the axes.
@@ -43,7 +85,8 @@ class OrientParams:
         A face is horizontal (floor, ceiling, table top) when its normal is within this angle of
         the vertical ("a small angle" in the paper).
     level_bucket_m
-        Bucket height of the altitude histogram (paper: 2 inches).
+        Bucket height of the altitude histogram (paper: 2 inches), from
+        :data:`MIN_LEVEL_BUCKET_M` to :data:`MAX_LEVEL_BUCKET_M`.
     min_room_height_m
         Smallest floor-to-ceiling gap of a story, separating floors from ceilings ("a gap of
         several feet"); 2.0 m is below the 2.13 m minimum ceiling height of most building codes.
@@ -77,6 +120,33 @@ class OrientParams:
         ``RemoveCeilingsAndFloors``) and, for the ceiling, from the story models.
     """
 
+    _parameter_constraints: ClassVar[dict[str, Constraint]] = {
+        "up": Options(UP_CHOICES),
+        "gravity_method": Options(GRAVITY_METHODS),
+        "gravity_cones_deg": _SCHEDULE,
+        "gravity_plane_fit": Boolean(),
+        "horizontal_tolerance_deg": _ANGLE,
+        "level_bucket_m": Real(
+            MIN_LEVEL_BUCKET_M, MAX_LEVEL_BUCKET_M, why="finer than 1 mm no scanner resolves; coarser than 0.5 m merges floors and furniture"
+        ),
+        "min_room_height_m": _HEIGHT,
+        "max_story_height_m": _HEIGHT,
+        "spike_fraction": _FRACTION,
+        "floor_group_m": _GAP,
+        "ceiling_group_m": _GAP,
+        "default_ceiling_height_m": _HEIGHT,
+        "wall_trim_schedule_deg": _SCHEDULE,
+        "wall_clusters": AnyOf(
+            Integer(0, 0),
+            Integer(2, MAX_WALL_CLUSTERS),
+            what=f"0 (automatic) or an integer from 2 to {MAX_WALL_CLUSTERS}",
+        ),
+        "keep_horizontal": Boolean(),
+        "wall_exclusion_deg": Real(0.0, 90.0, closed="right", why="an angle from the vertical"),
+        "extra_direction_fraction": _FRACTION,
+        "slab_tolerance_m": _GAP,
+    }
+
     up: str = "auto"
     gravity_method: str = "kmeans"
     gravity_cones_deg: tuple[float, ...] = (30.0, 20.0, 10.0, 5.0, 3.0)
@@ -96,35 +166,13 @@ class OrientParams:
     extra_direction_fraction: float = 0.08
     slab_tolerance_m: float = 0.1
 
-    def __post_init__(self) -> None:
-        if self.up not in UP_CHOICES:
-            raise ParameterError(f"unknown up axis {self.up!r}", f"use one of {', '.join(UP_CHOICES)}")
-        if self.gravity_method not in GRAVITY_METHODS:
-            raise ParameterError(
-                f"unknown gravity method {self.gravity_method!r}", f"use one of {', '.join(GRAVITY_METHODS)}"
-            )
-        for name in (
-            "horizontal_tolerance_deg",
-            "level_bucket_m",
-            "min_room_height_m",
-            "max_story_height_m",
-            "default_ceiling_height_m",
-            "wall_exclusion_deg",
-        ):
-            check_positive(name, getattr(self, name))
-        for name in ("floor_group_m", "ceiling_group_m", "slab_tolerance_m", "spike_fraction", "extra_direction_fraction"):
-            check_positive(name, getattr(self, name), allow_zero=True)
+    def _check_together(self) -> None:
+        """Rules tying fields together (each field alone was checked by its constraint)."""
         if self.max_story_height_m <= self.min_room_height_m:
             raise ParameterError(
-                "max_story_height_m must exceed min_room_height_m", "raise max_story_height_m"
+                f"max_story_height_m ({self.max_story_height_m:g}) must exceed min_room_height_m ({self.min_room_height_m:g})",
+                "raise max_story_height_m or lower min_room_height_m",
             )
-        for name in ("gravity_cones_deg", "wall_trim_schedule_deg"):
-            seq = tuple(float(a) for a in getattr(self, name))
-            if any(not (0 < a < 90) for a in seq) or list(seq) != sorted(seq, reverse=True):
-                raise ParameterError(f"{name} must be decreasing angles between 0 and 90 degrees, got {seq}", "fix the schedule")
-            object.__setattr__(self, name, seq)
-        if self.wall_clusters not in (0,) and not (2 <= self.wall_clusters <= 16):
-            raise ParameterError(f"wall_clusters must be 0 (automatic) or 2-16, got {self.wall_clusters}", "use 0 or 4")
 
     def to_dict(self) -> dict:
         return asdict(self)

@@ -3,13 +3,32 @@
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass
+from typing import ClassVar
 
-from ..errors import ParameterError
+from ..validation import AnyOf, Boolean, Constraint, Integer, Real, validated
 
 #: Drawing scales meshplan chooses from (1:n), so that a plan prints between about 12 and 40 cm.
 STANDARD_SCALES = (20, 50, 100, 200, 500, 1000, 2000)
 
+#: Largest drawing scale (smallest n of 1:n) that can be asked for. The page grows as 1/n: at
+#: 1:1 a 20 m story is a 20 m page, whose raster at the lowest resolution (30 dpi) would hold
+#: 24,000 x 24,000 pixels; 1:10 is the largest scale architects draw plans at (details are 1:5 and
+#: below), and keeps a 50 m story on a 5 m page (6000 pixels at 30 dpi).
+MIN_SCALE = 10
 
+#: Smallest drawing scale (largest n): at 1:100,000 a 100 m building is 1 mm on the page.
+MAX_SCALE = 100_000
+
+#: Resolution bounds in dots per inch: below 30 text is unreadable; above 1200 (a photo printer's
+#: resolution) the raster grows as the square of the dpi without anything more to see.
+MIN_DPI, MAX_DPI = 30, 1200
+
+#: Most drawing processes: each is a forked copy of the run (with the scan in memory); more than
+#: the cores only wait, and 64 is more cores than meshplan's machines have.
+MAX_PROCESSES = 64
+
+
+@validated
 @dataclass(frozen=True)
 class RenderParams:
     """How plans and figures are drawn.
@@ -23,7 +42,8 @@ class RenderParams:
         Scale bars and areas in feet and square feet (metres remain the model's unit).
     scale
         Drawing scale 1:``scale`` of the printed plans (PDF/SVG page size); 0 picks the
-        largest standard scale (1:20 ... 1:2000) at which the story fits on about 30 cm.
+        largest standard scale (1:20 ... 1:2000) at which the story fits on about 30 cm; else
+        from :data:`MIN_SCALE` to :data:`MAX_SCALE`.
     dpi
         Resolution of the PNG drawings and of the ink raster inside SVG and PDF.
     processes
@@ -31,21 +51,24 @@ class RenderParams:
         0 is one per core, at most 4; 1 draws everything in the main process.
     """
 
+    _parameter_constraints: ClassVar[dict[str, Constraint]] = {
+        "opacity": Real(0.0, 1.0, closed="right"),
+        "imperial": Boolean(),
+        "scale": AnyOf(
+            Integer(0, 0),
+            Integer(MIN_SCALE, MAX_SCALE),
+            what=f"0 (automatic) or an integer n from {MIN_SCALE} to {MAX_SCALE:,} for 1:n",
+            why="a larger scale draws a page the size of the building",
+        ),
+        "dpi": Integer(MIN_DPI, MAX_DPI, why="below 30 dpi text is unreadable; above 1200 the raster only grows"),
+        "processes": Integer(0, MAX_PROCESSES, why="each process is a copy of the run; more than the cores only wait"),
+    }
+
     opacity: float = 0.5
     imperial: bool = False
     scale: int = 0
     dpi: int = 150
     processes: int = 0
-
-    def __post_init__(self) -> None:
-        if not (0.0 < self.opacity <= 1.0):
-            raise ParameterError(f"opacity must be in (0, 1], got {self.opacity!r}", "pass --opacity between 0 and 1, e.g. 0.5")
-        if not isinstance(self.scale, int) or self.scale < 0:
-            raise ParameterError(f"scale must be a non-negative integer, got {self.scale!r}", "pass --scale 100 for 1:100, or 0 for automatic")
-        if not isinstance(self.processes, int) or self.processes < 0:
-            raise ParameterError(f"processes must be a non-negative integer, got {self.processes!r}", "pass 0 for automatic, or 1 to draw in the main process")
-        if not isinstance(self.dpi, int) or not 30 <= self.dpi <= 1200:
-            raise ParameterError(f"dpi must be an integer from 30 to 1200, got {self.dpi!r}", "pass --dpi 200")
 
     def to_dict(self) -> dict:
         return asdict(self)

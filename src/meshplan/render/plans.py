@@ -7,6 +7,7 @@ import numpy as np
 from ..geometry import Annotations
 from ..plan import DraftingPlan, PenAndInkPlan
 from ..plan.symbols import PlanSymbols
+from ..validation import PLAIN_TEXT_KW, plain_text
 from ..walls import FlatWalls
 from .params import RenderParams
 from .sheet import Sheet, draw_annotations, draw_scale_bar, ink_rgba, new_figure, place_raster, rasterize_segments
@@ -78,7 +79,8 @@ def drafting_figure(
             ax.add_patch(ArcPatch(a.center, 2 * a.radius, 2 * a.radius, theta1=a.start_deg, theta2=a.end_deg, color=WALL_COLOR, lw=0.4, ls="--", zorder=3))
         _draw_dimensions(ax, symbols)
         for lab in symbols.room_labels:
-            ax.text(*lab.position, lab.text, ha="center", va="center", fontsize=6.5, color="#222222", zorder=4, linespacing=1.3)
+            # room labels may one day carry a user's name: drawn as plain text, lines kept
+            ax.text(*lab.position, plain_text(lab.text, keep_newlines=True), ha="center", va="center", fontsize=6.5, color="#222222", zorder=4, linespacing=1.3, **PLAIN_TEXT_KW)
     draw_annotations(ax, annotations.labels, annotations.kinds, annotations.positions, annotations.directions)
     draw_scale_bar(fig, sheet, params)
     return fig

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..validation import PLAIN_TEXT_KW, plain_text
 from .params import STANDARD_SCALES, RenderParams
 
 FOOT_M = 0.3048
@@ -23,6 +24,10 @@ _MARGINS_IN = (0.75, 0.35, 0.6, 0.85)
 _MAX_PAPER_M = 0.30
 #: Largest raster side in pixels; huge buildings get a coarser raster rather than run out of memory.
 _MAX_PIXELS = 8000
+#: Largest drawing a forced ``--scale`` may make, in metres of paper along its longer side: the
+#: widest plotter rolls are about 1.5 m, so beyond 5 m the scale is a mistake (1:10 for a
+#: 100 m building), and the vector files and figures would grow with the page.
+MAX_PAGE_M = 5.0
 
 #: Marker of each annotation kind (all drawn in red).
 KIND_MARKERS = {"sensor": "o", "thermostat": "s", "door": "D", "window": "^", "other": "*"}
@@ -83,6 +88,14 @@ def make_sheet(points_xz: np.ndarray, params: RenderParams, margin_m: float = 0.
     scale = params.scale
     if scale == 0:
         scale = next((s for s in STANDARD_SCALES if longest / s <= _MAX_PAPER_M), STANDARD_SCALES[-1])
+    elif longest / scale > MAX_PAGE_M:
+        from ..errors import ParameterError
+
+        fits = next((s for s in STANDARD_SCALES if longest / s <= MAX_PAGE_M), STANDARD_SCALES[-1])
+        raise ParameterError(
+            f"scale 1:{scale} draws this {longest:.0f} m story on a {longest / scale:.1f} m page (at most {MAX_PAGE_M:g} m)",
+            f"pass --scale {fits} or larger, or 0 for the automatic scale",
+        )
     # huge sheets (a forced small scale) get fewer dots per inch rather than exhaust memory
     dpi = min(params.dpi, max(30, int(_MAX_PIXELS * scale * INCH_M / longest)))
     return Sheet(float(lo[0]), float(hi[0]), float(lo[1]), float(hi[1]), int(scale), dpi)
@@ -200,7 +213,8 @@ def draw_annotations(ax, labels, kinds, positions, directions, probe_m: float = 
                 arrowprops=dict(arrowstyle="-|>", color=ANNOTATION_COLOR, lw=0.8, mutation_scale=5),
                 zorder=5,
             )
-        ax.annotate(label, (x, z), xytext=(3, 3), textcoords="offset points", fontsize=5.5, color=ANNOTATION_COLOR, zorder=6)
+        # the user's text, drawn as it is: no mathtext ("$x^2$"), no control characters
+        ax.annotate(plain_text(label), (x, z), xytext=(3, 3), textcoords="offset points", fontsize=5.5, color=ANNOTATION_COLOR, zorder=6, **PLAIN_TEXT_KW)
     ax.legend(loc="lower right", fontsize=5, frameon=True, framealpha=0.8, markerscale=0.8, borderpad=0.3, handletextpad=0.3)
 
 

@@ -3,9 +3,17 @@
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass
+from typing import ClassVar
 
-from ..errors import ParameterError
-from ..geometry import check_positive
+from ..validation import (
+    MAX_LENGTH_M,
+    Constraint,
+    Integer,
+    Optional,
+    Options,
+    Real,
+    validated,
+)
 
 FOOT_M = 0.3048
 INCH_M = 0.0254
@@ -13,7 +21,29 @@ INCH_M = 0.0254
 #: Which wall directions the DBSCAN runs on.
 DIRECTION_MODES = ("auto", "principal", "all")
 
+#: Smallest side of the DBSCAN box in metres: below a millimetre (finer than any scanner) no two
+#: centroids are neighbours, and the grid of boxes the search hashes into would overflow.
+MIN_BOX_M = 0.001
 
+#: Longest box along the wall (and height), in metres: the paper's box is 0.46 m; beyond 10 m a
+#: box holds whole walls, and DBSCAN's neighbour lists grow with its volume (towards every pair of
+#: faces of a wall, quadratic time and memory).
+MAX_BOX_LENGTH_M = 10.0
+
+#: Deepest box across the wall, in metres: deeper than a metre a box joins the two faces of any
+#: wall and the walls of a corridor.
+MAX_BOX_DEPTH_M = 1.0
+
+#: Largest ``min_points``: a core point needs this many centroids in its box; beyond 10^6 none
+#: of any scan qualifies.
+MAX_MIN_POINTS = 1_000_000
+
+_LENGTH = Real(0.0, MAX_LENGTH_M, closed="right", why="lengths beyond 1 km are a unit mistake")
+_GAP = Real(0.0, MAX_LENGTH_M, why="lengths beyond 1 km are a unit mistake")
+_BOX_WHY = "finer than 1 mm finds no neighbours; larger boxes make DBSCAN quadratic"
+
+
+@validated
 @dataclass(frozen=True)
 class WallParams:
     """How flat walls are found.
@@ -55,7 +85,34 @@ class WallParams:
         8 inches).
     default_wall_thickness_m
         Thickness given to walls scanned from one side only.
+    max_work_surface_m
+        Highest work surface above the floor (bar counters, high desks: 1.1-1.2 m; kitchen
+        counters 0.9 m, desks 0.75 m, beds and seats 0.4-0.6 m). A wall rises above it wherever
+        it is kept, even where the story has no scanned ceiling and its walls end where the
+        scan ends.
+    context_m
+        How far in front of and behind a wall the scan is searched for what the wall's top must
+        reach (the ceiling near it, or, without one, the top of what was scanned around it) and
+        for surfaces behind it (the wall behind a counter, a desk or a wardrobe): deeper than
+        kitchen counters (0.6 m) and desks (0.8 m), shallower than a room.
     """
+
+    _parameter_constraints: ClassVar[dict[str, Constraint]] = {
+        "box_length_m": Real(MIN_BOX_M, MAX_BOX_LENGTH_M, why=_BOX_WHY),
+        "box_depth_m": Real(MIN_BOX_M, MAX_BOX_DEPTH_M, why=_BOX_WHY),
+        "box_height_m": Optional(Real(MIN_BOX_M, MAX_LENGTH_M, why="finer than 1 mm finds no neighbours")),
+        "min_points": Integer(1, MAX_MIN_POINTS),
+        "facing_tolerance_deg": Real(0.0, 90.0, closed="neither", why="an angle from the wall direction"),
+        "wall_directions": Options(DIRECTION_MODES),
+        "min_wall_length_m": _GAP,
+        "floor_reach_m": _GAP,
+        "ceiling_reach_m": _GAP,
+        "merge_gap_m": _GAP,
+        "max_wall_thickness_m": _LENGTH,
+        "default_wall_thickness_m": _LENGTH,
+        "max_work_surface_m": _GAP,
+        "context_m": _GAP,
+    }
 
     box_length_m: float = 1.5 * FOOT_M
     box_depth_m: float = 4 * INCH_M
@@ -69,22 +126,8 @@ class WallParams:
     merge_gap_m: float = 1.5
     max_wall_thickness_m: float = 8 * INCH_M
     default_wall_thickness_m: float = 0.15
-
-    def __post_init__(self) -> None:
-        for name in ("box_length_m", "box_depth_m", "facing_tolerance_deg", "max_wall_thickness_m", "default_wall_thickness_m"):
-            check_positive(name, getattr(self, name))
-        for name in ("min_wall_length_m", "floor_reach_m", "ceiling_reach_m", "merge_gap_m"):
-            check_positive(name, getattr(self, name), allow_zero=True)
-        if self.box_height_m is not None:
-            check_positive("box_height_m", self.box_height_m)
-        if not isinstance(self.min_points, int) or self.min_points < 1:
-            raise ParameterError(f"min_points must be a positive integer, got {self.min_points!r}", "pass --min-points N")
-        if self.wall_directions not in DIRECTION_MODES:
-            raise ParameterError(
-                f"unknown wall direction mode {self.wall_directions!r}", f"use one of {', '.join(DIRECTION_MODES)}"
-            )
-        if self.facing_tolerance_deg >= 90:
-            raise ParameterError("facing_tolerance_deg must be below 90", "use e.g. 25")
+    max_work_surface_m: float = 1.2
+    context_m: float = 1.0
 
     def to_dict(self) -> dict:
         return asdict(self)
