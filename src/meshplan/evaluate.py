@@ -1,5 +1,9 @@
 """Comparing a result (plan.json) with the ground truth of a synthetic scan (truth.json).
 
+A real scan's hand-digitized truth (``<scan>.truth.json``, recognised by its ``truth_to_input``)
+is scored by :mod:`meshplan.evaluate_real` instead: :func:`evaluate` and :func:`format_report`
+hand it over, so that ``meshplan evaluate`` takes either kind of truth.
+
 The truth is mapped into the plan frame by ``plan.transform @ truth.transform`` (truth frame to
 scan coordinates to plan frame), so no alignment is estimated: every error meshplan made,
 orientation included, shows. The report has the paper's Table 2 (room, true area, computed
@@ -204,7 +208,15 @@ def opening_scores(plan_openings: list[dict], plan_walls: list[dict], truth: dic
 
 
 def evaluate(plan: dict, truth: dict) -> dict[str, Any]:
-    """Every score of a result against ground truth (JSON-ready)."""
+    """Every score of a result against ground truth (JSON-ready).
+
+    A real-scan truth (it has ``truth_to_input``) is scored by
+    :func:`meshplan.evaluate_real.evaluate_real`; a synthetic truth here.
+    """
+    from .evaluate_real import evaluate_real, is_real_truth
+
+    if is_real_truth(truth):
+        return evaluate_real(plan, truth)
     p = truth_to_plan(plan, truth)
     gravity = float(np.degrees(np.arccos(np.clip((p[:3, :3] @ [0, 1, 0])[1], -1, 1))))
     x = p[:3, :3] @ [1, 0, 0]
@@ -239,6 +251,10 @@ def evaluate(plan: dict, truth: dict) -> dict[str, Any]:
 
 def format_report(report: dict) -> str:
     """The report as text, with the paper's Table 2 for the rooms."""
+    from .evaluate_real import REAL_REPORT_FORMAT, format_real_report
+
+    if report.get("format") == REAL_REPORT_FORMAT:
+        return format_real_report(report)
     lines = []
     lines.append(f"gravity error     {report['gravity_error_deg']:.3f} deg")
     lines.append(f"alignment error   {report['alignment_error_deg']:.3f} deg")
