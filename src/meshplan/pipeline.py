@@ -212,12 +212,22 @@ def compute(
     annotations: Annotations,
     options: RunOptions,
     timer: _Timer | None = None,
+    units_explicit: bool | None = None,
 ) -> Result:
-    """Run every computing stage on an already loaded mesh (input coordinates, metres)."""
+    """Run every computing stage on an already loaded mesh (input coordinates, metres).
+
+    ``units_explicit`` says whether the user named the scan's units (``--units``); ``None``
+    takes any unit but the default ``m`` as named. Units, up axis and the building itself are
+    checked against the geometry (:func:`meshplan.plausibility.orient_plausibly`).
+    """
+    from .plausibility import orient_plausibly
+
     timer = timer or _Timer(None)
+    if units_explicit is None:
+        units_explicit = options.input.units != "m"
     with timer.stage("orient"):
         check_not_flat(mesh)
-        orientation = orient(mesh, options.orient)
+        orientation, plausibility_warnings = orient_plausibly(mesh, options.input.units, options.orient, units_explicit)
         plan_mesh = mesh.transformed(orientation.transform).with_flipped(orientation.flipped)
         found = None
         if _up_in_doubt(orientation, options):
@@ -248,7 +258,7 @@ def compute(
                     annotations=story_ann,
                 )
             )
-    warnings = list(orientation.warnings)
+    warnings = list(orientation.warnings) + list(plausibility_warnings)
     for s in orientation.stories:
         if not np.any(walls.story == s.index):
             warnings.append(f"story {s.index}: no flat wall found (the drafting plan is empty)")
@@ -338,7 +348,9 @@ def run(
         with timer.stage("load"):
             loaded = load_mesh(scan, options.input.units, options.input.max_faces)
             ann = load_annotations(annotations, loaded.stats.scale_to_m) if annotations is not None else Annotations()
-        result = compute(loaded.mesh, loaded.stats, ann, options, timer)
+        # with keyword parameters, an absent --units comes as None (dropped by from_kwargs)
+        explicit = params.get("units") is not None if "units" in params else None
+        result = compute(loaded.mesh, loaded.stats, ann, options, timer, units_explicit=explicit)
         if output is not None:
             write_results(result, Path(output), force=force, timer=timer, started=t0, pool=pool)
         else:

@@ -106,9 +106,57 @@ def _call(job: tuple) -> dict[str, bytes]:
     return job[0](*job[1:])
 
 
-def _start_worker() -> None:
-    """A drawing worker's first steps: yield the CPU to the process computing the stages (the
-    drawings wait for it anyway), then get matplotlib ready."""
+#: ``PR_SET_PDEATHSIG`` from <linux/prctl.h>: the signal a process gets when its parent dies.
+_PR_SET_PDEATHSIG = 1
+#: Seconds between two looks at the parent where the kernel cannot signal its death (no
+#: prctl): a dead run's workers hold 170-240 MB each, which may linger this long at most.
+_PARENT_POLL_S = 1.0
+
+
+def _die_with_parent(parent: int) -> None:
+    """Make this worker die as soon as ``parent`` (the run that forked it) does, however it
+    dies: SIGKILL and the OOM killer leave a process no chance to stop its children.
+
+    On Linux the kernel sends SIGKILL to the worker when its parent exits
+    (``prctl(PR_SET_PDEATHSIG)``); the parent may have died between the fork and this call,
+    which the kernel would not report, so the parent is checked right after. Elsewhere (or if
+    prctl fails) a daemon thread watches for the worker being reparented.
+    """
+    import signal
+
+    if sys.platform.startswith("linux"):
+        try:
+            import ctypes
+
+            libc = ctypes.CDLL(None, use_errno=True)
+            if libc.prctl(_PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0) == 0:
+                if os.getppid() != parent:  # died before prctl took effect
+                    os._exit(1)
+                return
+        except (OSError, AttributeError):  # pragma: no cover - no libc prctl: poll instead
+            pass
+    import threading
+
+    def watch() -> None:
+        while os.getppid() == parent:
+            time.sleep(_PARENT_POLL_S)
+        os._exit(1)
+
+    if os.getppid() != parent:
+        os._exit(1)
+    threading.Thread(target=watch, name="meshplan-parent-watch", daemon=True).start()
+
+
+def _start_worker(parent: int) -> None:
+    """A drawing worker's first steps: die with ``parent``, leave Ctrl-C to it, yield the CPU
+    to the process computing the stages (the drawings wait for it anyway), then get matplotlib
+    ready."""
+    import signal
+
+    _die_with_parent(parent)
+    # Ctrl-C reaches the whole process group: the run reports it in one line and stops the
+    # workers itself; a worker interrupted mid-job would only print a traceback
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
     try:
         os.nice(10)
     except OSError:  # pragma: no cover - not allowed here: run at the same priority
@@ -155,7 +203,9 @@ class RenderPool:
             from concurrent.futures import ProcessPoolExecutor
 
             try:
-                self.executor = ProcessPoolExecutor(processes, mp_context=multiprocessing.get_context("fork"), initializer=_start_worker)
+                self.executor = ProcessPoolExecutor(
+                    processes, mp_context=multiprocessing.get_context("fork"), initializer=_start_worker, initargs=(os.getpid(),)
+                )
                 self.executor.submit(int)  # fork the workers now (not at the first job)
             except OSError as exc:  # no processes left to fork: draw here
                 log.debug("no drawing workers (%s); drawing in this process", exc)
@@ -164,9 +214,28 @@ class RenderPool:
     def __enter__(self) -> RenderPool:
         return self
 
-    def __exit__(self, *exc) -> None:
-        if self.executor is not None:
-            self.executor.shutdown(wait=True, cancel_futures=True)
+    def __exit__(self, exc_type, exc, tb) -> None:
+        if self.executor is None:
+            return
+        if exc_type is not None:
+            # interrupted or failed: the drawings are not wanted, and waiting for the jobs
+            # under way (workers ignore Ctrl-C) would delay the exit by seconds
+            self.terminate()
+        self.executor.shutdown(wait=True, cancel_futures=True)
+
+    def terminate(self) -> None:
+        """Kill the workers now (their jobs are lost)."""
+        processes = dict(getattr(self.executor, "_processes", None) or {})
+        for proc in processes.values():
+            try:
+                proc.kill()
+            except (OSError, ValueError):  # already gone or closed
+                pass
+        for proc in processes.values():
+            try:
+                proc.join(timeout=5.0)
+            except (OSError, ValueError, AssertionError):  # pragma: no cover - already reaped
+                pass
 
 
 def _submit(pool: RenderPool, jobs: list[tuple]) -> list:

@@ -1,0 +1,149 @@
+"""The drawing workers (:class:`meshplan.export.RenderPool`) die with the run that forked them,
+however it dies, and Ctrl-C ends a run with one line and no traceback.
+
+Each test starts a real ``python -m meshplan run`` on a synthetic apartment (about 200,000 faces,
+several seconds to run on a busy machine), waits for its drawing workers, signals the run and
+looks at the workers through ``/proc``.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="drawing workers are forked on Linux only")
+
+#: How long (s) a killed run's workers may take to die: the kernel signals them at once
+#: (prctl); the brief allows 2 s.
+DEATH_GRACE_S = 2.0
+#: How long (s) to wait for a run to fork its workers (it does so before reading the scan).
+FORK_TIMEOUT_S = 30.0
+#: Workers are looked at this long (s) after they appear, so that they are set up and the run is
+#: under way (reading, orienting; the drawings start a few seconds later).
+SETTLE_S = 1.5
+
+
+@pytest.fixture(scope="module")
+def apartment(tmp_path_factory) -> Path:
+    from meshplan.export.synth import write_synthetic
+    from meshplan.synthetic import SynthParams, generate
+
+    out = tmp_path_factory.mktemp("apartment")
+    return write_synthetic(generate(SynthParams(preset="apartment", seed=1)), out / "scan", "obj")
+
+
+def _children(pid: int) -> set[int]:
+    """Child processes of ``pid``, from ``/proc/<pid>/task/*/children`` (or every process's
+    parent id where the kernel lacks that file)."""
+    found: set[int] = set()
+    tasks = Path(f"/proc/{pid}/task")
+    files = list(tasks.glob("*/children")) if tasks.is_dir() else []
+    if files:
+        for f in files:
+            try:
+                found.update(int(p) for p in f.read_text().split())
+            except OSError:  # the task ended meanwhile
+                pass
+        return found
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        if int(fields[1]) == pid:
+            found.add(int(stat.parent.name))
+    return found
+
+
+def _alive(pid: int) -> bool:
+    """Whether ``pid`` runs (a zombie has died: only its exit status is left)."""
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except (OSError, IndexError):
+        return False
+    return state not in ("Z", "X")
+
+
+def _start(scan: Path, out: Path) -> subprocess.Popen:
+    env = dict(os.environ, PYTHONUNBUFFERED="1")
+    return subprocess.Popen(
+        [sys.executable, "-m", "meshplan", "run", str(scan), "-o", str(out), "--quiet"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        env=env,
+        start_new_session=True,  # its own process group: a Ctrl-C reaches it and its workers only
+    )
+
+
+def _workers(proc: subprocess.Popen) -> set[int]:
+    """The run's drawing workers, once they are forked and set up."""
+    deadline = time.monotonic() + FORK_TIMEOUT_S
+    while time.monotonic() < deadline and proc.poll() is None:
+        kids = _children(proc.pid)
+        if kids:
+            time.sleep(SETTLE_S)
+            kids |= _children(proc.pid)
+            assert proc.poll() is None, "the run ended before it could be signalled"
+            return kids
+        time.sleep(0.05)
+    pytest.fail(f"no drawing worker appeared within {FORK_TIMEOUT_S:.0f} s (run status {proc.poll()})")
+
+
+def _cleanup(proc: subprocess.Popen, pids: set[int]) -> None:
+    """Kill what the test started, whatever happened: the run, and its workers by their ids."""
+    for pid in [proc.pid, *pids]:
+        if _alive(pid):
+            try:
+                os.kill(pid, signal.SIGKILL)
+            except ProcessLookupError:
+                pass
+    try:
+        proc.communicate(timeout=10)
+    except subprocess.TimeoutExpired:  # pragma: no cover
+        pass
+
+
+@pytest.mark.parametrize("sig", [signal.SIGKILL, signal.SIGTERM], ids=["SIGKILL", "SIGTERM"])
+def test_workers_die_with_the_run(apartment, tmp_path, sig):
+    proc = _start(apartment, tmp_path / "out")
+    pids: set[int] = set()
+    try:
+        pids = _workers(proc)
+        assert all(_alive(p) for p in pids)
+        os.kill(proc.pid, sig)
+        proc.wait(timeout=10)
+        deadline = time.monotonic() + DEATH_GRACE_S
+        while time.monotonic() < deadline and any(_alive(p) for p in pids):
+            time.sleep(0.05)
+        alive = sorted(p for p in pids if _alive(p))
+        assert not alive, f"workers {alive} outlived the run killed by {sig.name}"
+        assert not (tmp_path / "out").exists()
+    finally:
+        _cleanup(proc, pids)
+
+
+def test_ctrl_c_is_one_line(apartment, tmp_path):
+    proc = _start(apartment, tmp_path / "out")
+    pids: set[int] = set()
+    try:
+        pids = _workers(proc)
+        os.killpg(proc.pid, signal.SIGINT)  # what a terminal's Ctrl-C does: the whole group
+        _, err = proc.communicate(timeout=60)
+        text = err.decode("utf-8", "replace")
+        lines = [line for line in text.splitlines() if line.strip()]
+        assert proc.returncode != 0
+        assert "Traceback" not in text, text
+        assert len(lines) == 1 and lines[0].startswith("error: "), text
+        deadline = time.monotonic() + DEATH_GRACE_S
+        while time.monotonic() < deadline and any(_alive(p) for p in pids):
+            time.sleep(0.05)
+        assert not [p for p in pids if _alive(p)]
+        assert not (tmp_path / "out").exists()
+    finally:
+        _cleanup(proc, pids)
