@@ -12,7 +12,10 @@ from the floor and ceiling structure:
    and ceilings make the up axis the heaviest, and when the ceiling is missing the floor, one
    level under every room, still outweighs walls split into many parallel planes. A candidate
    whose two main parallel surfaces are closer than a room height (the walls of a corridor) is
-   demoted, as is one whose surfaces are not spread along the axis at all (a single wall). The
+   demoted unless a good part of the walls rises past them (then they are a floor and a table
+   top), as is one whose surfaces are not spread along the axis at all (a single wall). Each
+   candidate is weighted, too, by the share of the horizon around its "floor" that its "walls"
+   enclose (:func:`enclosure`): along a wall's normal a missing ceiling leaves a whole side open. The
    file's own axes play no part: the same building gives the same answer however it is turned.
 2. *Refinement.* The paper's Method 2, with normals folded onto the axis' hemisphere so that
    floors and ceilings both contribute whatever their winding (the sign does not matter yet).
@@ -56,6 +59,33 @@ _CLUTTER_FLOOR_M2 = 0.5
 
 #: Plan cell size (m) of the occupancy test deciding the sign of up.
 _OCCUPANCY_CELL_M = 0.1
+
+#: Share of the surfaces standing along a candidate axis (its walls, were it up) that may lie
+#: beyond its two main parallel surfaces for those to be the two walls of a corridor. A
+#: corridor's walls bound what stands between them, apart from door and window recesses; when a
+#: quarter or more of the walls rises past the upper surface, that surface is a table top or a
+#: platform 0.7-0.9 m above a floor whose ceiling was not scanned, not the far wall of a corridor.
+_CORRIDOR_BEYOND_SHARE = 0.25
+
+#: How far (m) past a main surface a wall must reach to count as lying beyond it: more than the
+#: noise of a scanned surface and the depth of a skirting board or a window sill.
+_CORRIDOR_BEYOND_M = 0.1
+
+#: Number of equal sectors of the horizon, seen from the middle of the floor, in which the
+#: enclosure test looks for walls: 10 degrees each. A doorway 1 m wide seen from 3 m spans 19
+#: degrees, so an open door leaves one or two sectors empty, a whole missing side a third of them.
+_ENCLOSURE_SECTORS = 36
+
+#: A sector holds a wall when it holds at least this share of an even share of the wall area:
+#: the test asks whether a side is walled at all, not how well its wall was scanned.
+_ENCLOSURE_MIN_SHARE = 0.01
+
+#: Spacing (m) of the points sampled on large triangles for the enclosure test, so that the few
+#: metre-sized triangles of a parametric model (RoomPlan, Quest) count over their whole extent.
+_ENCLOSURE_SAMPLE_M = 0.1
+
+#: Most points sampled on one triangle (bounds the memory for absurdly large triangles).
+_ENCLOSURE_MAX_SAMPLES = 10_000
 
 
 @dataclass(frozen=True)
@@ -160,14 +190,82 @@ def _axis_evidence(centroids: FloatArray, normals: FloatArray, areas: FloatArray
     h = centroids[aligned] @ axis
     spikes = find_spikes(h, areas[aligned], params.level_bucket_m, 0.25)
     weight = float(areas[aligned].sum()) + 2.0 * max((s.weight for s in spikes), default=0.0)
-    if len(spikes) >= 2:
-        span = spikes[-1].height - spikes[0].height
-        if _SAME_SLAB_M < span < params.min_room_height_m:
-            return weight, 0.3
     vertical = np.abs(nh) <= np.sin(np.radians(params.wall_exclusion_deg))
+    if len(spikes) >= 2:
+        lo, hi = spikes[0].height, spikes[-1].height
+        if _SAME_SLAB_M < hi - lo < params.min_room_height_m:
+            # corridor walls bound what stands between them; a floor and a table top do not
+            hv = centroids[vertical] @ axis
+            beyond = (hv < lo - _CORRIDOR_BEYOND_M) | (hv > hi + _CORRIDOR_BEYOND_M)
+            total = float(areas[vertical].sum())
+            if total <= 0 or areas[vertical][beyond].sum() < _CORRIDOR_BEYOND_SHARE * total:
+                return weight, 0.3
     if areas[vertical].sum() < 0.05 * areas.sum():
         return weight, 0.1
     return weight, 1.0
+
+
+def _surface_samples(mesh: Mesh, faces: np.ndarray, spacing: float) -> tuple[FloatArray, FloatArray]:
+    """Points spread over the faces ``faces`` (indices) about ``spacing`` apart, and the area
+    each stands for.
+
+    A small triangle (scans: 1-10 cm) gives its centroid; a large one (a parametric wall: one
+    triangle of several square metres) gives a low-discrepancy set of points over its whole
+    surface, so that a test sees where its surface is, not only where its centre is.
+    Deterministic.
+    """
+    areas = mesh.face_areas[faces]
+    k = np.clip(np.ceil(areas / spacing**2), 1, _ENCLOSURE_MAX_SAMPLES).astype(np.int64)
+    rep = np.repeat(faces, k)
+    j = np.arange(len(rep)) - np.repeat(np.cumsum(k) - k, k)
+    # the R2 sequence (plastic number) folded into the triangle; a lone point is the centroid
+    g = 1.32471795724474602596
+    u = (0.5 + j / g) % 1.0
+    v = (0.5 + j / g**2) % 1.0
+    fold = u + v > 1.0
+    u[fold], v[fold] = 1.0 - u[fold], 1.0 - v[fold]
+    single = np.repeat(k == 1, k)
+    u[single], v[single] = 1.0 / 3.0, 1.0 / 3.0
+    tri = mesh.vertices[mesh.faces[rep]]
+    pts = tri[:, 0] + u[:, None] * (tri[:, 1] - tri[:, 0]) + v[:, None] * (tri[:, 2] - tri[:, 0])
+    return pts, mesh.face_areas[rep] / np.repeat(k, k)
+
+
+def _weighted_median(x: FloatArray, w: FloatArray) -> float:
+    order = np.argsort(x, kind="stable")
+    cum = np.cumsum(w[order])
+    return float(x[order][min(int(np.searchsorted(cum, 0.5 * cum[-1])), len(x) - 1)])
+
+
+def enclosure(mesh: Mesh, axis: FloatArray, params: OrientParams) -> float:
+    """Share (0-1) of the horizon, seen from the middle of the floor, in which walls stand,
+    were ``axis`` up.
+
+    Walls surround a floor on every side, whether the ceiling was scanned or not. Along a wrong
+    axis (a wall's normal) the "walls" are the floor, the ceiling and the other walls, so a
+    missing ceiling (RoomPlan models have none; phones and HoloLens often miss it) leaves a whole
+    side of that "room" open: a third of its horizon. The horizon is cut into
+    :data:`_ENCLOSURE_SECTORS` sectors around the area-weighted median of the surfaces facing
+    along the axis (floor and ceiling, were it up); a sector is walled when surfaces standing
+    along the axis lie in it. A scan of part of a room (a corner) is open on its unscanned sides
+    along every axis, the true one included, so this weighs candidates against each other and
+    rejects none.
+    """
+    nh = mesh.face_normals @ axis
+    aligned = np.flatnonzero(np.abs(nh) >= np.cos(np.radians(params.horizontal_tolerance_deg)))
+    vertical = np.flatnonzero(np.abs(nh) <= np.sin(np.radians(params.wall_exclusion_deg)))
+    if not len(aligned) or not len(vertical):
+        return 0.0
+    e1 = unit(np.cross(axis, [1.0, 0.0, 0.0] if abs(axis[0]) < 0.9 else [0.0, 1.0, 0.0]))
+    basis = np.c_[e1, np.cross(axis, e1)]
+    pa, wa = _surface_samples(mesh, aligned, _ENCLOSURE_SAMPLE_M)
+    plan = pa @ basis
+    centre = np.array([_weighted_median(plan[:, 0], wa), _weighted_median(plan[:, 1], wa)])
+    pv, wv = _surface_samples(mesh, vertical, _ENCLOSURE_SAMPLE_M)
+    d = pv @ basis - centre
+    sector = np.floor((np.arctan2(d[:, 1], d[:, 0]) + np.pi) / (2.0 * np.pi) * _ENCLOSURE_SECTORS).astype(np.int64)
+    walls = np.bincount(sector % _ENCLOSURE_SECTORS, weights=wv, minlength=_ENCLOSURE_SECTORS)
+    return float(np.mean(walls >= _ENCLOSURE_MIN_SHARE * wv.sum() / _ENCLOSURE_SECTORS))
 
 
 def _refine_kmeans(normals: FloatArray, areas: FloatArray, rough: FloatArray, cones_deg: tuple[float, ...]) -> tuple[FloatArray, int]:
@@ -243,6 +341,7 @@ def estimate_gravity(mesh: Mesh, params: OrientParams, up_hint: FloatArray | Non
             if p.weight < 0.05 * top:
                 break
             weight, plaus = _axis_evidence(centroids, normals, areas, p.axis, params)
+            plaus *= enclosure(mesh, p.axis, params)
             candidates.append(Candidate(p.axis, weight, plaus, weight * plaus))
         best = max(candidates, key=lambda c: c.score)
         # the k-means refinement ignores the sign; decide it on the refined axis, whose levels
