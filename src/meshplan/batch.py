@@ -718,7 +718,10 @@ def _run_dask(
                 except Exception as exc:  # the task never ran to the end (a dead worker, no meshplan there, ...)
                     outcome = {
                         "status": "failed",
-                        "error": _one_line(f"the Dask task failed ({type(exc).__name__}: {exc}); check that meshplan is installed on the workers and that they have enough memory"),
+                        "error": _one_line(
+                            f"the Dask task failed ({type(exc).__name__}: {exc}); "
+                            "check that meshplan is installed on the workers and that they have enough memory"
+                        ),
                     }
                 on_done(i, outcome)
         finally:

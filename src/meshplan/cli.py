@@ -125,7 +125,9 @@ def run(
     imperial: Optional[bool] = typer.Option(None, "--imperial/--metric", help=_d("imperial", "Scale bars and areas in feet (or metres).")),
     scale: Optional[int] = typer.Option(None, "--scale", help=_d("scale", "Drawing scale 1:N (0 = automatic).")),
     dpi: Optional[int] = typer.Option(None, "--dpi", help=_d("dpi", "PNG resolution (dots per inch).")),
-    drafting_height: Optional[float] = typer.Option(None, "--drafting-height", help=_d("drafting_height_m", "Cut height of the drafting plan above the floor (m).")),
+    drafting_height: Optional[float] = typer.Option(
+        None, "--drafting-height", help=_d("drafting_height_m", "Cut height of the drafting plan above the floor (m).")
+    ),
     box_length: Optional[float] = typer.Option(None, "--box-length", help=_d("box_length_m", "DBSCAN box along the wall (m; paper: 1.5 ft).")),
     box_depth: Optional[float] = typer.Option(None, "--box-depth", help=_d("box_depth_m", "DBSCAN box across the wall (m; paper: a few inches).")),
     box_height: Optional[float] = typer.Option(None, "--box-height", help="DBSCAN box height (m) [default: the story's floor-to-ceiling height]."),
@@ -135,7 +137,9 @@ def run(
     floor_reach: Optional[float] = typer.Option(None, "--floor-reach", help=_d("floor_reach_m", "A wall must come this close to the floor (m).")),
     ceiling_reach: Optional[float] = typer.Option(None, "--ceiling-reach", help=_d("ceiling_reach_m", "A wall must come this close to the ceiling (m).")),
     min_room_height: Optional[float] = typer.Option(None, "--min-room-height", help=_d("min_room_height_m", "Smallest floor-to-ceiling gap of a story (m).")),
-    default_ceiling_height: Optional[float] = typer.Option(None, "--default-ceiling-height", help=_d("default_ceiling_height_m", "Ceiling height assumed when none is scanned (m).")),
+    default_ceiling_height: Optional[float] = typer.Option(
+        None, "--default-ceiling-height", help=_d("default_ceiling_height_m", "Ceiling height assumed when none is scanned (m).")
+    ),
     ifc: bool = typer.Option(False, "--ifc", help="Also write model.ifc (IFC4; needs the ifc extra)."),
     max_faces: Optional[int] = typer.Option(None, "--max-faces", help="Refuse larger scans [default: what fits in memory]."),
     set_: list[str] = typer.Option([], "--set", help="Any other parameter, NAME=VALUE (see plan.json 'parameters')."),
@@ -255,7 +259,9 @@ def batch(
     inputs: list[str] = typer.Argument(..., help="Directories of scans (searched recursively), glob patterns (quote them) or scan files."),
     output: Path = typer.Option(..., "--output", "-o", help="Batch directory: one directory per scan, plus summary.csv and summary.json. May exist."),
     workers: int = typer.Option(1, "--workers", "-j", help="Scans processed at once by local worker processes (0 = one per core)."),
-    scheduler: Optional[str] = typer.Option(None, "--scheduler", help="Run on a Dask cluster at this address (tcp://host:port); its workers must see the same files at the same paths."),
+    scheduler: Optional[str] = typer.Option(
+        None, "--scheduler", help="Run on a Dask cluster at this address (tcp://host:port); its workers must see the same files at the same paths."
+    ),
     force: bool = typer.Option(False, "--force", "-f", help="Replace existing per-scan directories (else those scans fail and keep their old results)."),
     units: Optional[Units] = typer.Option(None, "--units", help=_d("units", "Unit of the scans' coordinates.")),
     up: Optional[Up] = typer.Option(None, "--up", help=_d("up", "Input axis that is roughly up, or auto.")),
@@ -265,12 +271,19 @@ def batch(
     dpi: Optional[int] = typer.Option(None, "--dpi", help=_d("dpi", "PNG resolution (dots per inch).")),
     scale: Optional[int] = typer.Option(None, "--scale", help=_d("scale", "Drawing scale 1:N (0 = automatic).")),
     opacity: Optional[float] = typer.Option(None, "--opacity", help=_d("opacity", "Opacity of each pen-and-ink slice.")),
-    drafting_height: Optional[float] = typer.Option(None, "--drafting-height", help=_d("drafting_height_m", "Cut height of the drafting plan above the floor (m).")),
-    default_ceiling_height: Optional[float] = typer.Option(None, "--default-ceiling-height", help=_d("default_ceiling_height_m", "Ceiling height assumed when none is scanned (m).")),
+    drafting_height: Optional[float] = typer.Option(
+        None, "--drafting-height", help=_d("drafting_height_m", "Cut height of the drafting plan above the floor (m).")
+    ),
+    default_ceiling_height: Optional[float] = typer.Option(
+        None, "--default-ceiling-height", help=_d("default_ceiling_height_m", "Ceiling height assumed when none is scanned (m).")
+    ),
     ifc: bool = typer.Option(False, "--ifc", help="Also write model.ifc for every scan (IFC4; needs the ifc extra)."),
     annotations: Optional[str] = typer.Option(
         None, "--annotations", "-a",
-        help="Annotations of each scan, relative to its directory, {stem} standing for the scan's name (e.g. '{stem}-sensors.json') [default: <stem>.annotations.json, else annotations.json].",
+        help=(
+            "Annotations of each scan, relative to its directory, {stem} standing for the scan's name "
+            "(e.g. '{stem}-sensors.json') [default: <stem>.annotations.json, else annotations.json]."
+        ),
     ),
     exclude: list[str] = typer.Option(
         [], "--exclude", "-x", help="Glob pattern of files that are not scans, on the name or the path (repeatable; e.g. '*.su_planes.ply')."

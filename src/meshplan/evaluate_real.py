@@ -441,7 +441,9 @@ def evaluate_real(plan: dict, truth: dict) -> dict[str, Any]:
 
 def _pool(stories: list[dict]) -> dict[str, Any]:
     """Scores over all truth stories: summed lengths and counts, then the same ratios."""
-    wall_keys = ("walls", "truth_walls", "sure_truth_walls", "predicted_length_m", "matched_length_m", "sure_length_m", "covered_sure_length_m", "furniture_length_m")
+    wall_keys = (
+        "walls", "truth_walls", "sure_truth_walls", "predicted_length_m", "matched_length_m", "sure_length_m", "covered_sure_length_m", "furniture_length_m"
+    )
     total: dict[str, Any] = {"walls": _wall_ratios({k: sum(s["walls"][k] for s in stories) for k in wall_keys})}
     total["rooms"] = _room_ratios(
         {

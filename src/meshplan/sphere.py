@@ -71,7 +71,7 @@ def _kmeans_rounds(
 
     cos_tol = np.cos(tol_rad)
     it = 0
-    for it in range(1, max_iter + 1):
+    for it in range(1, max_iter + 1):  # noqa: B007 (the count of rounds is returned)
         labels, sim, sums, cw = kmeans_round(x, w, centers, idx)
         norms = np.linalg.norm(sums, axis=1)
         moved = norms > 0

@@ -14,6 +14,7 @@ import numpy as np
 
 from ..io import staged_directory
 from ..orient import without_ceiling
+from ..plan.symbols import plan_symbols
 from ..render import (
     drafting_figure,
     figure_bytes,
@@ -23,7 +24,6 @@ from ..render import (
     pen_and_ink_figure,
     segments_figure,
 )
-from ..plan.symbols import plan_symbols
 from ..slicing import slice_mesh
 from .dxf import drafting_dxf
 from .glb import WALL_RGBA, glb_bytes

@@ -72,8 +72,8 @@ def drafting_dxf(
             msp.add_line(c, (c[0] + 0.4 * d[0] / n, c[1] - 0.4 * d[2] / n), dxfattribs={"layer": "ANNOTATIONS"})
         msp.add_text(_literal_text(f"{label} ({kind})"), height=0.12, dxfattribs={"layer": "TEXT"}).set_placement((c[0] + 0.1, c[1] + 0.1))
     for room in rooms:
-        pts = [_p(c) for c in list(room.polygon.exterior.coords)[:-1]]
-        msp.add_lwpolyline(pts, close=True, dxfattribs={"layer": "ROOMS"})
+        outline = [_p(c) for c in list(room.polygon.exterior.coords)[:-1]]
+        msp.add_lwpolyline(outline, close=True, dxfattribs={"layer": "ROOMS"})
     if symbols is not None:
         for seg in symbols.door_leaves:
             msp.add_line(_p(seg[0]), _p(seg[1]), dxfattribs={"layer": "DOORS"})
@@ -87,7 +87,10 @@ def drafting_dxf(
         for d in symbols.dimensions:
             p1, p2 = np.asarray(_p(d.p1)), np.asarray(_p(d.p2))
             # "left of p1 -> p2" in the plan is right of it in the mirrored drawing
-            dim = msp.add_aligned_dim(p1=tuple(p1), p2=tuple(p2), distance=-d.offset, dimstyle="EZDXF", override={"dimtxt": 0.1, "dimasz": 0.06, "dimlfac": 1.0, "dimdec": 2, "dimexo": 0.05, "dimexe": 0.05}, dxfattribs={"layer": "DIMENSIONS"})
+            style = {"dimtxt": 0.1, "dimasz": 0.06, "dimlfac": 1.0, "dimdec": 2, "dimexo": 0.05, "dimexe": 0.05}
+            dim = msp.add_aligned_dim(
+                p1=tuple(p1), p2=tuple(p2), distance=-d.offset, dimstyle="EZDXF", override=style, dxfattribs={"layer": "DIMENSIONS"}
+            )
             dim.render()
         for lab in symbols.room_labels:
             msp.add_mtext(lab.text.replace("\n", "\\P"), dxfattribs={"layer": "ROOMS", "char_height": 0.18}).set_location(_p(lab.position), attachment_point=5)
@@ -119,7 +122,6 @@ def _reproducible_bytes(doc) -> bytes:
     """The DXF text without the dates and random GUIDs ezdxf writes, so that the same plan gives
     the same file."""
     import ezdxf
-
     from ezdxf.document import CREATED_BY_EZDXF, WRITTEN_BY_EZDXF
 
     meta = doc.ezdxf_metadata()

@@ -52,12 +52,14 @@ def _placement(origin_xz, height: float, direction_xz=(1.0, 0.0)) -> np.ndarray:
 
 def ifc_bytes(result: Result) -> bytes:
     """The IFC4 model of a result, as STEP text."""
-    ifcopenshell = _require_ifcopenshell()
+    _require_ifcopenshell()
     from ifcopenshell.api import aggregate, context, feature, geometry, project, pset, root, spatial, unit
 
     f = project.create_file(version="IFC4")
     proj = root.create_entity(f, ifc_class="IfcProject", name=f"meshplan: {result.input.path}")
-    unit.assign_unit(f, length={"is_metric": True, "raw": "METERS"}, area={"is_metric": True, "raw": "SQUARE_METERS"}, volume={"is_metric": True, "raw": "CUBIC_METERS"})
+    unit.assign_unit(
+        f, length={"is_metric": True, "raw": "METERS"}, area={"is_metric": True, "raw": "SQUARE_METERS"}, volume={"is_metric": True, "raw": "CUBIC_METERS"}
+    )
     model = context.add_context(f, context_type="Model")
     body = context.add_context(f, context_type="Model", context_identifier="Body", target_view="MODEL_VIEW", parent=model)
     site = root.create_entity(f, ifc_class="IfcSite", name="Site")

@@ -9,8 +9,8 @@ import numpy as np
 
 from ..errors import ParameterError
 from ..io import staged_directory
-from ..io.atomic import KIND_SYNTHETIC
 from ..io.annotations import annotations_document
+from ..io.atomic import KIND_SYNTHETIC
 
 SCAN_FORMATS = ("obj", "ply", "glb", "stl", "off")
 

@@ -109,7 +109,7 @@ def _wall_votes(
         grid = np.zeros(tuple(cells.max(axis=0) - lo + 1), dtype=bool)
         grid[cells[:, 0] - lo[0], cells[:, 1] - lo[1]] = True
 
-        def has_floor(p: FloatArray) -> FloatArray:
+        def has_floor(p: FloatArray, grid: np.ndarray = grid, lo: np.ndarray = lo) -> FloatArray:
             c = np.floor(p / _FLOOR_CELL_M).astype(np.int64) - lo
             ok = (c[:, 0] >= 0) & (c[:, 0] < grid.shape[0]) & (c[:, 1] >= 0) & (c[:, 1] < grid.shape[1])
             found = np.zeros(len(p))

@@ -143,9 +143,11 @@ def _wall_openings(tri: FloatArray, walls: FlatWalls, w: int, floor: float, ceil
         if rs.stop >= nrow - margin:
             continue  # no wall above: a missing strip, not an opening
         kind = None
-        if touches_floor and params.door_width_m[0] - 2 * cell <= width <= params.door_width_m[1] + 2 * cell and high - floor >= params.door_height_m - 2 * cell:
+        door_wide = params.door_width_m[0] - 2 * cell <= width <= params.door_width_m[1] + 2 * cell
+        window_wide = params.window_width_m[0] - 2 * cell <= width <= params.window_width_m[1] + 2 * cell
+        if touches_floor and door_wide and high - floor >= params.door_height_m - 2 * cell:
             kind = "door"
-        elif not touches_floor and low - floor >= params.window_sill_m - cell and params.window_width_m[0] - 2 * cell <= width <= params.window_width_m[1] + 2 * cell and high - low >= params.window_height_m:
+        elif not touches_floor and low - floor >= params.window_sill_m - cell and window_wide and high - low >= params.window_height_m:
             kind = "window"
         if kind is None:
             continue

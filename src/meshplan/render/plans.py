@@ -40,7 +40,8 @@ def pen_and_ink_figure(plan: PenAndInkPlan, annotations: Annotations, sheet: She
     heights is dark. One figure serves every format it is saved in."""
     s = plan.story
     n = len(plan.slices.heights) - 1
-    fig, ax = new_figure(sheet, _story_title(f"Pen-and-ink ({n} slices, opacity {params.opacity:g})", s.index, n_stories, s.floor, s.ceiling, params.imperial), params)
+    title = _story_title(f"Pen-and-ink ({n} slices, opacity {params.opacity:g})", s.index, n_stories, s.floor, s.ceiling, params.imperial)
+    fig, ax = new_figure(sheet, title, params)
     ax.patch.set_alpha(0.0)  # the ink sits under the axes
     place_raster(fig, ax, pen_and_ink_raster(plan, sheet, params))
     draw_annotations(ax, annotations.labels, annotations.kinds, annotations.positions, annotations.directions)
@@ -64,23 +65,24 @@ def drafting_figure(
     s = plan.story
     cut = plan.height - s.floor
     fig, ax = new_figure(sheet, _story_title(f"Drafting (cut at {cut:.2f} m)", s.index, n_stories, s.floor, s.ceiling, params.imperial), params)
-    ax.add_collection(LineCollection(plan.slices.segments, colors=WALL_COLOR, linewidths=1.6, capstyle="projecting", zorder=3))
+    # list(): the stubs want a Sequence of segments, an (S, 2, 2) array iterates the same
+    ax.add_collection(LineCollection(list(plan.slices.segments), colors=WALL_COLOR, linewidths=1.6, capstyle="projecting", zorder=3))
     if symbols is not None:
         # rooms as a light tint with a dashed edge: where no wall closes a room (a wall the scan
         # missed), the dashes show where it was closed from the scanned floor
         from matplotlib.collections import PolyCollection
 
         ax.add_collection(PolyCollection(symbols.room_outlines, facecolors=ROOM_TINT, edgecolors=ROOM_EDGE, linewidths=0.4, linestyles=(0, (3, 2)), zorder=1))
-        thin = dict(colors=WALL_COLOR, linewidths=0.5, zorder=3)
-        ax.add_collection(LineCollection(symbols.jambs, **thin))
-        ax.add_collection(LineCollection(symbols.windows, colors="#1f4e99", linewidths=0.6, zorder=3))
-        ax.add_collection(LineCollection(symbols.door_leaves, colors=WALL_COLOR, linewidths=0.9, zorder=3))
+        ax.add_collection(LineCollection(list(symbols.jambs), colors=WALL_COLOR, linewidths=0.5, zorder=3))
+        ax.add_collection(LineCollection(list(symbols.windows), colors="#1f4e99", linewidths=0.6, zorder=3))
+        ax.add_collection(LineCollection(list(symbols.door_leaves), colors=WALL_COLOR, linewidths=0.9, zorder=3))
         for a in symbols.door_arcs:
             ax.add_patch(ArcPatch(a.center, 2 * a.radius, 2 * a.radius, theta1=a.start_deg, theta2=a.end_deg, color=WALL_COLOR, lw=0.4, ls="--", zorder=3))
         _draw_dimensions(ax, symbols)
         for lab in symbols.room_labels:
             # room labels may one day carry a user's name: drawn as plain text, lines kept
-            ax.text(*lab.position, plain_text(lab.text, keep_newlines=True), ha="center", va="center", fontsize=6.5, color="#222222", zorder=4, linespacing=1.3, **PLAIN_TEXT_KW)
+            text = plain_text(lab.text, keep_newlines=True)
+            ax.text(*lab.position, text, ha="center", va="center", fontsize=6.5, color="#222222", zorder=4, linespacing=1.3, **PLAIN_TEXT_KW)
     draw_annotations(ax, annotations.labels, annotations.kinds, annotations.positions, annotations.directions)
     draw_scale_bar(fig, sheet, params)
     return fig
@@ -106,7 +108,8 @@ def _draw_dimensions(ax, symbols: PlanSymbols) -> None:
         if rot > 90 or rot < -90:
             rot += 180
         mid = 0.5 * (a + b) + left * 0.07
-        ax.text(mid[0], mid[1], d.text, fontsize=4.5, color=DIM_COLOR, ha="center", va="center", rotation=((rot + 180) % 360) - 180, rotation_mode="anchor", zorder=4)
+        angle = ((rot + 180) % 360) - 180
+        ax.text(mid[0], mid[1], d.text, fontsize=4.5, color=DIM_COLOR, ha="center", va="center", rotation=angle, rotation_mode="anchor", zorder=4)
     ax.add_collection(LineCollection(lines, colors=DIM_COLOR, linewidths=0.3, zorder=2))
     ax.add_collection(LineCollection(ticks, colors=DIM_COLOR, linewidths=0.5, zorder=2))
 

@@ -9,11 +9,15 @@ from __future__ import annotations
 
 import io
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from ..validation import PLAIN_TEXT_KW, plain_text
 from .params import STANDARD_SCALES, RenderParams
+
+if TYPE_CHECKING:
+    from matplotlib.typing import RcKeyType
 
 FOOT_M = 0.3048
 INCH_M = 0.0254
@@ -261,14 +265,18 @@ def ink_rgba(counts: np.ndarray, opacity: float, color: str = "#14213d", width_p
     return lut[c]
 
 
-_RC = {"svg.fonttype": "none", "svg.hashsalt": "meshplan", "pdf.compression": 1, "path.simplify": True}
+_RC: dict[RcKeyType, Any] = {"svg.fonttype": "none", "svg.hashsalt": "meshplan", "pdf.compression": 1, "path.simplify": True}
 
 
 def figure_bytes(fig, fmt: str) -> bytes:
     """Render a figure to PNG, SVG or PDF bytes, without timestamps (byte-reproducible)."""
     import matplotlib
 
-    meta = {"png": {"Software": "meshplan"}, "svg": {"Date": None, "Creator": "meshplan"}, "pdf": {"CreationDate": None, "Creator": "meshplan", "Producer": "meshplan"}}[fmt]
+    meta = {
+        "png": {"Software": "meshplan"},
+        "svg": {"Date": None, "Creator": "meshplan"},
+        "pdf": {"CreationDate": None, "Creator": "meshplan", "Producer": "meshplan"},
+    }[fmt]
     buf = io.BytesIO()
     with matplotlib.rc_context(_RC):
         kwargs = {"pil_kwargs": {"compress_level": 1}} if fmt == "png" else {}

@@ -234,7 +234,6 @@ def _stair(
     rise = rise_total / n
     n1 = (n + 1) // 2
     a = np.r_[wall.direction[0], 0.0, wall.direction[1]]
-    nn = np.r_[wall.normal[0], 0.0, wall.normal[1]]
     rot = np.stack([a, _UP, np.cross(a, _UP)], axis=1)
     gap = STAIR_WALL_GAP_M
     if rng.random() < 0.5:
@@ -266,8 +265,8 @@ def _stair(
         for r in (start, landing + depth_l):
             for u in lane:
                 pts.append(wall.start + u * wall.direction + r * wall.normal)
-    pts = np.array(pts)
-    lo, hi = pts.min(axis=0) - 0.03, pts.max(axis=0) + 0.03
+    corners = np.array(pts)
+    lo, hi = corners.min(axis=0) - 0.03, corners.max(axis=0) + 0.03
     assert landing + depth_l + 0.03 < far_m - 0.1, "stairwell too short for its stair"
     return Stair(story, room, (float(lo[0]), float(hi[0]), float(lo[1]), float(hi[1])), tuple(boxes), n, rise, going, flight)
 
@@ -316,8 +315,8 @@ def make_building(preset: str, n_stories: int, rng: np.random.Generator) -> Buil
             index[(s, label)] = len(rooms)
             rooms.append(Room(s, label, kind, mapped(poly)))
     walls: list[Wall] = []
-    for i, r in enumerate(rooms):
-        walls += _walls_of(i, r, *stories[r.story])
+    for i, room in enumerate(rooms):
+        walls += _walls_of(i, room, *stories[room.story])
     occupied: dict[int, list[tuple[float, float]]] = {i: [] for i in range(len(walls))}
     openings: list[Opening] = []
     n_doors = n_windows = 0
@@ -330,7 +329,7 @@ def make_building(preset: str, n_stories: int, rng: np.random.Generator) -> Buil
         for la, lb in plan.doors:
             ra, rb = index[(s, la)], index[(s, lb)]
             width_m, height_m = uniform(rng, 0.8, 0.9), uniform(rng, 2.0, 2.1)
-            options = []
+            door_options: list[tuple[int, int, float, list[tuple[float, float]]]] = []
             for ia in room_walls(ra):
                 for ib in room_walls(rb):
                     f = _facing(walls[ia], walls[ib])
@@ -338,14 +337,18 @@ def make_building(preset: str, n_stories: int, rng: np.random.Generator) -> Buil
                         continue
                     lo, hi, gap = f
                     wb = walls[ib]
-                    taken = occupied[ia] + [tuple(sorted(walls[ia].u_of(wb.point(u)) for u in o)) for o in occupied[ib]]
+                    taken = list(occupied[ia])
+                    for o in occupied[ib]:
+                        u0, u1 = sorted(walls[ia].u_of(wb.point(u)) for u in o)
+                        taken.append((u0, u1))
                     free = free_centres(lo, hi, width_m, DOOR_MARGIN_M, taken)
                     if free:
-                        options.append((ia, ib, gap, free))
-            if not options:
+                        door_options.append((ia, ib, gap, free))
+            if not door_options:
                 raise RuntimeError(f"no room for a door between {la} and {lb}")  # a layout bug
-            ia, ib, gap, free = options[int(rng.integers(len(options)))]
+            ia, ib, gap, free = door_options[int(rng.integers(len(door_options)))]
             u = _pick(free, rng)
+            assert u is not None  # free is never empty
             n_doors += 1
             label = f"D{n_doors}"
             ub = walls[ib].u_of(walls[ia].point(u))
@@ -355,16 +358,17 @@ def make_building(preset: str, n_stories: int, rng: np.random.Generator) -> Buil
         if plan.entrance is not None:
             r = index[(s, plan.entrance)]
             width_m, height_m = uniform(rng, 0.8, 0.9), uniform(rng, 2.0, 2.1)
-            options = []
+            entrance_options: list[tuple[int, list[tuple[float, float]]]] = []
             for i in room_walls(r):
                 for lo, hi in _exterior(walls, i):
                     free = free_centres(lo, hi, width_m, DOOR_MARGIN_M, occupied[i])
                     if free:
-                        options.append((i, free))
-            if not options:
+                        entrance_options.append((i, free))
+            if not entrance_options:
                 raise RuntimeError(f"no room for the entrance of {plan.entrance}")
-            i, free = options[int(rng.integers(len(options)))]
+            i, free = entrance_options[int(rng.integers(len(entrance_options)))]
             u = _pick(free, rng)
+            assert u is not None  # free is never empty
             n_doors += 1
             openings.append(Opening(s, "door", i, u, width_m, floor, floor + height_m, f"D{n_doors}", ext, True, True))
             occupied[i].append((u - width_m / 2, u + width_m / 2))
@@ -375,7 +379,7 @@ def make_building(preset: str, n_stories: int, rng: np.random.Generator) -> Buil
             for _ in range(count):
                 width_m = uniform(rng, 0.9, 1.8)
                 sill, head = uniform(rng, 0.8, 1.0), uniform(rng, 2.0, 2.2)
-                options = []
+                window_options: list[tuple[int, float, list[tuple[float, float]]]] = []
                 for i in room_walls(r):
                     for lo, hi in _exterior(walls, i):
                         fit = min(width_m, hi - lo - 2 * WINDOW_MARGIN_M)
@@ -383,11 +387,12 @@ def make_building(preset: str, n_stories: int, rng: np.random.Generator) -> Buil
                             continue
                         free = free_centres(lo, hi, fit, WINDOW_MARGIN_M, occupied[i])
                         if free:
-                            options.append((i, fit, free))
-                if not options:
+                            window_options.append((i, fit, free))
+                if not window_options:
                     break
-                i, fit, free = options[int(rng.integers(len(options)))]
+                i, fit, free = window_options[int(rng.integers(len(window_options)))]
                 u = _pick(free, rng)
+                assert u is not None  # free is never empty
                 n_windows += 1
                 depth_m = ext * uniform(rng, 0.5, 0.7)
                 openings.append(Opening(s, "window", i, u, fit, floor + sill, floor + head, f"W{n_windows}", depth_m, True, True))

@@ -220,7 +220,10 @@ def _nodes(length: float, breaks: FloatArray, cell_m: float) -> tuple[FloatArray
 def face_count_model(pieces: list[Piece], cells_m: FloatArray):
     """A fast predictor of the number of faces: ``model(scale)`` is the expected face count when
     every piece's cell is ``cells_m * scale`` (cuts counted by their area)."""
-    ids_u, len_u, ids_v, len_v = [], [], [], []
+    ids_u_parts: list[IntArray] = []
+    len_u_parts: list[FloatArray] = []
+    ids_v_parts: list[IntArray] = []
+    len_v_parts: list[FloatArray] = []
     singles = 0
     kept = np.zeros(len(pieces))
     for k, p in enumerate(pieces):
@@ -229,15 +232,15 @@ def face_count_model(pieces: list[Piece], cells_m: FloatArray):
             continue
         bu, bv = p.breaks()
         wb, wt = p.widths()
-        len_u.append(np.diff(bu) * max(wb, wt))
-        len_v.append(np.diff(bv) * (p.v_range[1] - p.v_range[0]))
-        ids_u.append(np.full(len(bu) - 1, k))
-        ids_v.append(np.full(len(bv) - 1, k))
+        len_u_parts.append(np.diff(bu) * max(wb, wt))
+        len_v_parts.append(np.diff(bv) * (p.v_range[1] - p.v_range[0]))
+        ids_u_parts.append(np.full(len(bu) - 1, k))
+        ids_v_parts.append(np.full(len(bv) - 1, k))
         kept[k] = p.kept_fraction()
-    if not len_u:
+    if not len_u_parts:
         return lambda scale: float(singles)
-    len_u, len_v = np.concatenate(len_u), np.concatenate(len_v)
-    ids_u, ids_v = np.concatenate(ids_u), np.concatenate(ids_v)
+    len_u, len_v = np.concatenate(len_u_parts), np.concatenate(len_v_parts)
+    ids_u, ids_v = np.concatenate(ids_u_parts), np.concatenate(ids_v_parts)
     cells_m = np.asarray(cells_m, dtype=np.float64)
 
     def model(scale: float) -> float:
@@ -374,12 +377,12 @@ def tessellate(pieces: list[Piece], rng: np.random.Generator) -> tuple[FloatArra
         tc = 0.5 * (tv[cj[sl]] + tv[cj[sl] + 1])
         uc = ul0[q] + tc * (ul1[q] - ul0[q]) + sc * (wb[q] + tc * (wt[q] - wb[q]))
         vc = v0[q] + tc * hh[q]
-        k = np.ones(len(uc), dtype=bool)
+        kept = np.ones(len(uc), dtype=bool)
         if p.cuts:
-            k &= ~_in_rects(uc, vc, p._clipped(p.cuts))
+            kept &= ~_in_rects(uc, vc, p._clipped(p.cuts))
         if p.keep is not None:
-            k &= _inside_polygon(uc, vc, p.keep)
-        keep[sl] = k
+            kept &= _inside_polygon(uc, vc, p.keep)
+        keep[sl] = kept
     diag = rng.random(len(cp)) < 0.5
     a = vstart[cp] + cj * (nu + 1)[cp] + ci
     del ci, cj
@@ -396,7 +399,7 @@ def tessellate(pieces: list[Piece], rng: np.random.Generator) -> tuple[FloatArra
         u, v = metric()
         cu, cv = u[corners], v[corners]
 
-        def area2(i0: int, i1: int, i2: int) -> FloatArray:
+        def area2(i0: int, i1: int, i2: int, cu: FloatArray = cu, cv: FloatArray = cv) -> FloatArray:
             return (cu[:, i1] - cu[:, i0]) * (cv[:, i2] - cv[:, i0]) - (cu[:, i2] - cu[:, i0]) * (cv[:, i1] - cv[:, i0])
 
         eps = 0.02 * np.abs((cu[:, 2] - cu[:, 0]) * (cv[:, 2] - cv[:, 0])) + 1e-12
