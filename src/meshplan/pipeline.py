@@ -351,6 +351,8 @@ def run(
         # with keyword parameters, an absent --units comes as None (dropped by from_kwargs)
         explicit = params.get("units") is not None if "units" in params else None
         result = compute(loaded.mesh, loaded.stats, ann, options, timer, units_explicit=explicit)
+        if loaded.warnings:  # the reader's (float32 precision) first, before the stages'
+            result.warnings = tuple(loaded.warnings) + tuple(result.warnings)
         if output is not None:
             write_results(result, Path(output), force=force, timer=timer, started=t0, pool=pool)
         else:

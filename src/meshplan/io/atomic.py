@@ -131,7 +131,7 @@ def _inside(path: Path, directory: Path) -> bool:
     return path == directory or directory in path.parents
 
 
-def _check_replaceable(t: Path, kind: str, protect: Iterable[str | os.PathLike]) -> None:
+def _check_replaceable(t: Path, kind: str, protect: Iterable[str | os.PathLike | None]) -> None:
     """Refuse to replace ``t`` unless meshplan made it (see the module's docstring)."""
     real = t.resolve()
     hint = "choose another output directory with -o"
@@ -173,7 +173,7 @@ def _name_max(directory: Path) -> int:
 
 
 def check_output_dir(
-    target: str | os.PathLike, force: bool, *, kind: str = KIND_PLANS, protect: Iterable[str | os.PathLike] = ()
+    target: str | os.PathLike, force: bool, *, kind: str = KIND_PLANS, protect: Iterable[str | os.PathLike | None] = ()
 ) -> Path:
     """Check, before any work, that a result directory of ``kind`` can be created at ``target``.
 
@@ -188,8 +188,8 @@ def check_output_dir(
     kind
         What meshplan writes there (:data:`KIND_PLANS`, :data:`KIND_SYNTHETIC`).
     protect
-        Paths that must not lie inside what is replaced (the scan, the annotations); the working
-        directory is always protected.
+        Paths that must not lie inside what is replaced (the scan, the annotations; ``None`` entries
+        are skipped); the working directory is always protected.
 
     Returns
     -------
@@ -295,7 +295,7 @@ def _remove_created(created: list[Path]) -> None:
 
 @contextlib.contextmanager
 def staged_directory(
-    target: str | os.PathLike, force: bool = False, *, kind: str = KIND_PLANS, protect: Iterable[str | os.PathLike] = ()
+    target: str | os.PathLike, force: bool = False, *, kind: str = KIND_PLANS, protect: Iterable[str | os.PathLike | None] = ()
 ) -> Iterator[Path]:
     """Yield an empty hidden directory; on success it is stamped as meshplan's (``kind``) and
     replaces ``target`` in one rename.

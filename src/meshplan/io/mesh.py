@@ -1,8 +1,11 @@
 """Reading scanned meshes into plain arrays, with the clean-up every scan needs.
 
-Formats are read by trimesh: OBJ (including the multi-object exports of the HoloLens Device
-Portal), PLY (ascii and binary), GLB/glTF (the scene graph flattened with its node transforms),
-STL and OFF. Whatever the file holds is flattened into one :class:`~meshplan.geometry.Mesh` in
+OBJ (including the multi-object exports of the HoloLens Device Portal), PLY (ascii and binary)
+and OFF are read by meshplan's own readers (:mod:`meshplan.io.readers`: float64, polygons
+fan-triangulated, truncation detected); GLB/glTF (the scene graph flattened with its node
+transforms) and STL by trimesh. Before anything is read, the file must be a regular file whose
+header does not declare more than it holds, and the mesh must fit in the memory left (host and
+cgroup limit). Whatever the file holds is flattened into one :class:`~meshplan.geometry.Mesh` in
 metres, and the faces that cannot be used are dropped and counted:
 
 * faces touching a vertex with a NaN or infinite coordinate,
@@ -16,7 +19,9 @@ even when an exporter wrote each object with its own vertices.
 from __future__ import annotations
 
 import json
+import logging
 import os
+import stat
 import struct
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -25,6 +30,10 @@ import numpy as np
 
 from ..errors import InputError, ParameterError
 from ..geometry import Mesh
+from . import readers
+from .readers import REEXPORT, RawMesh, truncated
+
+log = logging.getLogger("meshplan")
 
 #: File extensions meshplan reads, with the trimesh file type for each.
 MESH_FORMATS = {".obj": "obj", ".ply": "ply", ".glb": "glb", ".gltf": "gltf", ".stl": "stl", ".off": "off"}
@@ -38,6 +47,30 @@ BYTES_PER_FACE = 1000
 
 #: Smallest triangle area kept, in square metres (after unit conversion).
 MIN_FACE_AREA_M2 = 1e-12
+
+#: A header that declares more than this many times the data its file could hold, even at the
+#: most compact encoding, is called corrupt rather than cut short (a copy or download that
+#: stopped early keeps most of the file), and is refused before its count feeds the memory check.
+LYING_HEADER_FACTOR = 4
+
+#: Precision, in metres, below which float32 storage goes unremarked: a millimetre is finer than
+#: any scan's noise; beyond it (float32 keeps 7 digits: 0.25 m at a georeferenced 5e6 m) meshplan
+#: warns that the file lost precision before it was read.
+FLOAT32_PRECISION_WARN_M = 1e-3
+
+#: Fewest bytes of an ASCII OFF vertex line (``0 0 0`` and a newline) and face line
+#: (``3 0 0 0``), to bound what a header may declare.
+OFF_MIN_VERTEX_BYTES, OFF_MIN_FACE_BYTES = 6, 8
+
+#: Fewest bytes per triangle in a GLB: three one-byte indices.
+GLB_MIN_FACE_BYTES = 3
+
+#: cgroup file system (v2 unified hierarchy, or v1 with a ``memory`` controller directory).
+CGROUP_ROOT = Path("/sys/fs/cgroup")
+
+#: cgroup v1 reports "no limit" as a huge number (2**63 rounded down to a page); anything above
+#: this many bytes (1 EB) is no limit.
+CGROUP_NO_LIMIT_BYTES = 2**60
 
 
 @dataclass(frozen=True)
@@ -69,8 +102,22 @@ class LoadStats:
 
 @dataclass(frozen=True, eq=False)
 class LoadedMesh:
+    """A mesh read from a file, what was read and dropped, and what the user should know.
+
+    Attributes
+    ----------
+    mesh
+        The cleaned mesh, in metres.
+    stats
+        What was read from the file and what was dropped.
+    warnings
+        One-line warnings about the file (e.g. coordinates whose float32 storage lost more
+        than :data:`FLOAT32_PRECISION_WARN_M`); each is also logged on the ``meshplan`` logger.
+    """
+
     mesh: Mesh
     stats: LoadStats
+    warnings: tuple[str, ...] = ()
 
 
 def check_units(units: str) -> float:
@@ -85,10 +132,19 @@ def check_units(units: str) -> float:
 def check_mesh_path(path: str | os.PathLike) -> tuple[Path, str]:
     """The path and trimesh file type, after checking that the file can be a mesh at all."""
     p = Path(path)
-    if not p.exists():
-        raise InputError(f"{p}: file not found", "check the path of the scan")
-    if p.is_dir():
+    try:
+        # stat, not open: opening a FIFO blocks until something writes to it
+        st = p.stat()
+    except FileNotFoundError:
+        raise InputError(f"{p}: file not found", "check the path of the scan") from None
+    except OSError as exc:
+        raise InputError(f"{p}: cannot be read ({exc.strerror})", "check the path and the permissions of the scan") from None
+    if stat.S_ISDIR(st.st_mode):
         raise InputError(f"{p}: is a directory, not a mesh file", "give the path of an OBJ, PLY, GLB, glTF, STL or OFF file")
+    if not stat.S_ISREG(st.st_mode):
+        mode = st.st_mode
+        kind = "a FIFO (named pipe)" if stat.S_ISFIFO(mode) else "a device" if stat.S_ISCHR(mode) or stat.S_ISBLK(mode) else "a socket"
+        raise InputError(f"{p}: is {kind}, not a mesh file", "save the scan to a regular file and give its path")
     ext = p.suffix.lower()
     if ext not in MESH_FORMATS:
         raise InputError(
@@ -96,12 +152,11 @@ def check_mesh_path(path: str | os.PathLike) -> tuple[Path, str]:
             "convert the scan to OBJ, PLY, GLB, glTF, STL or OFF",
         )
     try:
-        size = p.stat().st_size
         with open(p, "rb"):
             pass
     except OSError as exc:
         raise InputError(f"{p}: cannot be read ({exc.strerror})", "check the file's permissions") from None
-    if size == 0:
+    if st.st_size == 0:
         raise InputError(f"{p}: the file is empty", "export the scan again")
     return p, MESH_FORMATS[ext]
 
@@ -125,10 +180,8 @@ def estimate_faces(path: Path, file_type: str) -> int | None:
         if file_type == "stl" and len(head) >= 84 and not head[:5].lower().startswith(b"solid"):
             return struct.unpack("<I", head[80:84])[0]
         if file_type == "off":
-            lines = [ln for ln in head.decode("ascii", "replace").splitlines() if ln.strip() and not ln.startswith("#")]
-            first = lines[0].split()
-            counts = first[1:] if first[0].upper().endswith("OFF") and len(first) > 1 else lines[1].split()
-            return int(counts[1])
+            counts = readers.off_counts(head)
+            return None if counts is None else counts[1]
         if file_type == "glb" and head[:4] == b"glTF":
             length = struct.unpack("<I", head[12:16])[0]
             doc = json.loads(head[20 : 20 + length])
@@ -143,19 +196,84 @@ def estimate_faces(path: Path, file_type: str) -> int | None:
     return None
 
 
+def _read_int(path: Path) -> int | None:
+    """The integer a cgroup file holds; ``None`` for ``max``, a missing or unreadable file."""
+    try:
+        text = path.read_text().strip()
+        return None if text == "max" else int(text)
+    except (OSError, ValueError):
+        return None
+
+
+def _inactive_file(stat_file: Path, key: str) -> int:
+    """Page cache the kernel reclaims before hitting the limit (``inactive_file`` of
+    ``memory.stat``): counted in the usage, but available, as container runtimes count it."""
+    try:
+        for line in stat_file.read_text().splitlines():
+            name, _, value = line.partition(" ")
+            if name == key:
+                return int(value)
+    except (OSError, ValueError):
+        pass
+    return 0
+
+
+def _own_cgroup_dirs(root: Path) -> list[Path]:
+    """The cgroup directories of this process (from /proc/self/cgroup) and the root, v2 first."""
+    dirs = []
+    try:
+        for line in Path("/proc/self/cgroup").read_text().splitlines():
+            _, controllers, rel = line.split(":", 2)
+            if controllers == "":  # v2 unified hierarchy
+                dirs.append(root / rel.lstrip("/"))
+            elif "memory" in controllers.split(","):  # v1 memory controller
+                dirs.append(root / "memory" / rel.lstrip("/"))
+    except (OSError, ValueError):
+        pass
+    return list(dict.fromkeys([*dirs, root, root / "memory"]))  # a hybrid host lists the root twice
+
+
+def cgroup_available_bytes(root: Path | None = None) -> int | None:
+    """Memory left under this process's cgroup limit (v2 ``memory.max`` minus
+    ``memory.current``, or v1 ``memory.limit_in_bytes`` minus ``memory.usage_in_bytes``, less
+    the reclaimable page cache), or ``None`` when no limit applies."""
+    root = CGROUP_ROOT if root is None else root
+    best = None
+    for d in _own_cgroup_dirs(root):
+        for limit_name, usage_name, cache_key in (
+            ("memory.max", "memory.current", "inactive_file"),
+            ("memory.limit_in_bytes", "memory.usage_in_bytes", "total_inactive_file"),
+        ):
+            limit = _read_int(d / limit_name)
+            if limit is None or limit >= CGROUP_NO_LIMIT_BYTES:
+                continue
+            usage = _read_int(d / usage_name) or 0
+            left = max(0, limit - max(0, usage - _inactive_file(d / "memory.stat", cache_key)))
+            best = left if best is None else min(best, left)
+    return best
+
+
 def available_memory_bytes() -> int | None:
-    """Memory the process can still use, from /proc/meminfo (Linux) or sysconf."""
+    """Memory the process can still use: the least of the host's available memory
+    (/proc/meminfo, or sysconf) and what its cgroup limit leaves (a container's limit is far
+    below the host's memory, and the kernel kills a process that exceeds it)."""
+    host = None
     try:
         with open("/proc/meminfo") as fh:
             for line in fh:
                 if line.startswith("MemAvailable:"):
-                    return int(line.split()[1]) * 1024
-    except OSError:
+                    host = int(line.split()[1]) * 1024
+                    break
+    except (OSError, ValueError, IndexError):
         pass
-    try:
-        return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
-    except (ValueError, OSError, AttributeError):
-        return None
+    if host is None:
+        try:
+            host = os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+        except (ValueError, OSError, AttributeError):
+            host = None
+    limit = cgroup_available_bytes()
+    found = [x for x in (host, limit) if x is not None]
+    return min(found) if found else None
 
 
 #: Bytes of each PLY scalar type.
@@ -170,7 +288,7 @@ def _ply_data_needs(head: bytes) -> tuple[dict[str, int], int, int] | None:
 
     Lower bounds: a binary scalar takes its size, an ASCII one at least two bytes (a digit and
     a separator); a face's vertex list holds at least three indices. ``None`` when ``head`` is
-    not a complete, well-formed PLY header (trimesh then reports what is wrong).
+    not a complete, well-formed PLY header (the PLY reader then says what is wrong).
     """
     end = head.find(b"end_header")
     if not head.startswith(b"ply") or end < 0:
@@ -206,11 +324,26 @@ def _ply_data_needs(head: bytes) -> tuple[dict[str, int], int, int] | None:
     return counts, stop + 1, need
 
 
-def check_header(path: Path, file_type: str) -> None:
-    """Refuse a PLY or binary STL whose header declares more data than the file holds.
+def lying_header(path: Path, claimed: int, noun: str, size: int) -> InputError:
+    """The refusal of a header that declares far more than its file can hold."""
+    return InputError(
+        f"{path}: corrupt header: header claims {claimed:,} {noun} but the file is only {size:,} bytes",
+        REEXPORT,
+    )
 
-    Such a file was cut short, or its header lies; saying so is clearer than the reader's
-    error, and it keeps the memory check from trusting an absurd face count.
+
+def _is_ascii_stl(head: bytes) -> bool:
+    """ASCII STL starts with ``solid`` (so do some binary STL headers: they hold no facet)."""
+    return head[:5].lower() == b"solid" and (b"facet" in head or b"endsolid" in head)
+
+
+def check_header(path: Path, file_type: str) -> None:
+    """Refuse a file whose header declares more data than the file holds.
+
+    A header declaring more than :data:`LYING_HEADER_FACTOR` times what the file could hold is
+    corrupt ("header claims N faces but the file is only X bytes"); one declaring a little more
+    was cut short ("is truncated: header says N faces, file holds M"; for the text formats and
+    PLY, the readers count M). Either way the count never reaches the memory check.
     """
     size = path.stat().st_size
     with open(path, "rb") as fh:
@@ -220,21 +353,27 @@ def check_header(path: Path, file_type: str) -> None:
         if found is None:
             return
         counts, header_len, need = found
-        if size - header_len < need:
-            raise InputError(
-                f"{path}: cut short or a wrong header: the PLY header declares {counts.get('vertex', 0):,} vertices "
-                f"and {counts.get('face', 0):,} faces, which need at least {need:,} bytes, "
-                f"but only {size - header_len:,} follow it",
-                "export or copy the scan again",
-            )
-    elif file_type == "stl" and len(head) >= 84 and not head[:5].lower().startswith(b"solid"):
+        if need > LYING_HEADER_FACTOR * max(size - header_len, 1):
+            noun, claimed = ("faces", counts["face"]) if counts.get("face") else ("vertices", counts.get("vertex", 0))
+            raise lying_header(path, claimed, noun, size)
+    elif file_type == "stl" and len(head) >= 84 and not _is_ascii_stl(head):
         n = struct.unpack("<I", head[80:84])[0]
         if size < 84 + 50 * n:
-            raise InputError(
-                f"{path}: damaged or cut short: its binary STL header declares {n:,} triangles, which need "
-                f"{84 + 50 * n:,} bytes, but the file has {size:,}",
-                "export or copy the scan again",
-            )
+            if 84 + 50 * n > LYING_HEADER_FACTOR * size:
+                raise lying_header(path, n, "faces", size)
+            raise truncated(path, f"{n:,} faces", f"{(size - 84) // 50:,}")
+    elif file_type == "off":
+        off = readers.off_counts(head)
+        if off is not None and off[0] * OFF_MIN_VERTEX_BYTES + off[1] * OFF_MIN_FACE_BYTES > LYING_HEADER_FACTOR * size:
+            noun, claimed = ("faces", off[1]) if off[1] * OFF_MIN_FACE_BYTES > size else ("vertices", off[0])
+            raise lying_header(path, claimed, noun, size)
+    elif file_type == "glb" and head[:4] == b"glTF" and len(head) >= 20:
+        declared = struct.unpack("<I", head[8:12])[0]
+        faces = estimate_faces(path, file_type)
+        if faces is not None and faces * GLB_MIN_FACE_BYTES > LYING_HEADER_FACTOR * size:
+            raise lying_header(path, faces, "faces", size)
+        if declared > size:
+            raise truncated(path, f"{faces or 0:,} faces in {declared:,} bytes", f"{size:,} bytes")
 
 
 #: Bytes that text files do not hold (tab, newlines, vertical tab, form feed are allowed).
@@ -305,11 +444,28 @@ def _check_obj_ending(path: Path) -> None:
             raise InputError(f"{path}: the file ends in the middle of a line ({last[:40]!r}): it was cut short", "export or copy the scan again")
 
 
-def _read_with_trimesh(path: Path, file_type: str) -> tuple[np.ndarray, np.ndarray, int]:
+def _check_stl_ending(path: Path, head: bytes) -> None:
+    """An ASCII STL has no count, but it ends with ``endsolid``: without it, it was cut short."""
+    if not _is_ascii_stl(head):
+        return
+    size = path.stat().st_size
+    with open(path, "rb") as fh:
+        fh.seek(max(0, size - 1024))
+        tail = fh.read()
+    if b"endsolid" not in tail.lower():
+        facets = path.read_bytes().count(b"endfacet")
+        raise InputError(f"{path}: is truncated: an ASCII STL ends with endsolid, this one stops after {facets:,} complete facets", REEXPORT)
+
+
+def _vertices(geometry: object) -> np.ndarray:
+    """The vertices of a trimesh geometry (a mesh, a point cloud; none for a path)."""
+    return np.asarray(getattr(geometry, "vertices", np.zeros((0, 3))), dtype=np.float64)
+
+
+def _read_with_trimesh(path: Path, file_type: str) -> RawMesh:
+    """STL, GLB and glTF, read by trimesh (glTF node transforms applied)."""
     import trimesh
 
-    if file_type in ("obj", "off"):
-        _check_text(path, file_type)
     if file_type == "gltf":
         try:
             json.loads(path.read_bytes())
@@ -318,44 +474,83 @@ def _read_with_trimesh(path: Path, file_type: str) -> tuple[np.ndarray, np.ndarr
                 f"{path}: not a glTF file: not valid JSON ({' '.join(str(exc).split())[:80]})",
                 "check that the file is a glTF export, or export the scan again (GLB is one self-contained file)",
             ) from None
-    if file_type == "obj":
-        _check_obj_ending(path)
-
+    with open(path, "rb") as fh:
+        head = fh.read(65536)
+    if file_type == "stl":
+        _check_stl_ending(path, head)
     try:
-        # OBJ: one geometry per object, as HoloLens exports write one object per surface patch
-        extra = {"split_objects": True, "group_material": False} if file_type == "obj" else {}
-        loaded = trimesh.load(str(path), file_type=file_type, process=False, force=None, **extra)
+        loaded = trimesh.load(str(path), file_type=file_type, process=False, force=None)
     except Exception as exc:  # trimesh raises many types for broken files
         reason = str(exc).splitlines()[0][:120] if str(exc) else type(exc).__name__
         if isinstance(exc, KeyError):  # trimesh indexes the file's structures without checking
             reason = f"missing entry {exc}"
-        if isinstance(exc, ImportError):  # trimesh guesses the encoding of non-UTF-8 text with an optional package
-            reason = "it is not UTF-8 text"
         raise InputError(
             f"{path}: cannot be read as {file_type.upper()} ({reason})",
             "check that the file is a complete, uncorrupted mesh export",
         ) from None
-    geoms = loaded.dump() if isinstance(loaded, trimesh.Scene) else [loaded]
-    verts, faces, offset, objects = [], [], 0, 0
-    points_only = False
+    if isinstance(loaded, trimesh.Scene):
+        # the stored (float32) positions are those before the node transforms
+        stored = [_vertices(g) for g in loaded.geometry.values()]
+        geoms = loaded.dump()
+    else:
+        geoms = [loaded]
+        stored = [_vertices(loaded)]
+    binary_stl = file_type == "stl" and not _is_ascii_stl(head)
+    float32 = file_type in ("glb", "gltf") or binary_stl  # glTF positions are float32; so is binary STL
+    extent = max((float(np.abs(v[np.isfinite(v)]).max(initial=0.0)) for v in stored), default=0.0) if float32 else 0.0
+    verts, faces, points, offset, objects = [], [], [], 0, 0
     for g in geoms:
         if isinstance(g, trimesh.Trimesh) and len(g.faces):
             v = np.asarray(g.vertices, dtype=np.float64)
-            f = np.asarray(g.faces, dtype=np.int64)
             verts.append(v)
-            faces.append(f + offset)
+            faces.append(np.asarray(g.faces, dtype=np.int64) + offset)
             offset += len(v)
             objects += 1
         elif isinstance(g, (trimesh.PointCloud, trimesh.Trimesh)) and len(getattr(g, "vertices", [])):
-            points_only = True
+            points.append(np.asarray(g.vertices, dtype=np.float64))  # only to say "a point cloud"
     if not faces:
-        if points_only:
+        return RawMesh(np.concatenate(points) if points else np.zeros((0, 3)), np.zeros((0, 3), np.int64), 0, extent)
+    return RawMesh(np.concatenate(verts), np.concatenate(faces), objects, extent)
+
+
+def read_raw(path: Path, file_type: str) -> RawMesh:
+    """The vertices and triangles of a mesh file, as stored (no clean-up), or an
+    :class:`InputError` saying why the file cannot be read."""
+    if file_type in ("obj", "off"):
+        _check_text(path, file_type)
+    if file_type == "obj":
+        _check_obj_ending(path)
+        raw = readers.read_obj(path)
+    elif file_type == "off":
+        raw = readers.read_off(path)
+    elif file_type == "ply":
+        raw = readers.read_ply(path)
+    else:
+        raw = _read_with_trimesh(path, file_type)
+    if not len(raw.faces):
+        if len(raw.vertices):
             raise InputError(
                 f"{path}: holds points but no triangles (a point cloud, or a file cut short)",
                 "mesh the point cloud first (e.g. Poisson reconstruction) or export the scan as a mesh",
             )
         raise InputError(f"{path}: holds no triangles", "export the scan again as a triangle mesh")
-    return np.concatenate(verts), np.concatenate(faces), objects
+    return raw
+
+
+def float32_warning(path: Path, extent: float, scale: float) -> str | None:
+    """A warning when float32 storage of coordinates up to ``extent`` (file units, times
+    ``scale`` to metres) lost more than :data:`FLOAT32_PRECISION_WARN_M`."""
+    if not np.isfinite(extent) or extent <= 0:
+        return None
+    lost_m = float(np.spacing(np.float32(extent))) / 2 * scale  # rounding to the nearest float32
+    if lost_m <= FLOAT32_PRECISION_WARN_M:
+        return None
+    lost = f"{lost_m * 1000:.0f} mm" if lost_m < 1 else f"{lost_m:.2f} m"
+    return (
+        f"{path}: coordinates are stored as float32 and reach {extent * scale:,.0f} m from the origin "
+        f"(a georeferenced offset?), where float32 keeps only about {lost} precision; "
+        f"export the scan around a local origin, or as PLY with double coordinates, to keep millimetres"
+    )
 
 
 def _merge_vertices(vertices: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -439,7 +634,8 @@ def load_mesh(path: str | os.PathLike, units: str = "m", max_faces: int | None =
     scale = check_units(units)
     p, file_type = check_mesh_path(path)
     check_size(p, file_type, max_faces)
-    vertices, faces, objects = _read_with_trimesh(p, file_type)
+    raw = read_raw(p, file_type)
+    vertices, faces, objects = raw.vertices, raw.faces, raw.objects
     n_v, n_f = len(vertices), len(faces)
     if faces.size and (faces.min() < 0 or faces.max() >= n_v):
         raise InputError(f"{p}: faces refer to vertices that do not exist", "export the scan again")
@@ -462,7 +658,9 @@ def load_mesh(path: str | os.PathLike, units: str = "m", max_faces: int | None =
             f"coordinates, {stats.dropped_degenerate:,} degenerate, {stats.dropped_duplicate:,} duplicate)",
             "export the scan again",
         )
-    return LoadedMesh(mesh=mesh, stats=stats)
+    # not logged here: the run puts them into Result.warnings, which the command line prints once
+    warnings = tuple(w for w in [float32_warning(p, raw.float32_extent, scale)] if w)
+    return LoadedMesh(mesh=mesh, stats=stats, warnings=warnings)
 
 
 def write_mesh(mesh: Mesh, path: str | os.PathLike) -> None:
