@@ -601,7 +601,8 @@ def _run_local(
         parent, child = ctx.Pipe()
         with _single_threaded_env():
             # not daemonic: a scan may draw with processes > 1 (forked children); stopped in finally
-            p = ctx.Process(target=_worker_main, args=(child, func), name="meshplan-batch-worker", daemon=False)
+            # typeshed's get_context(str) gives BaseContext, which lacks Process; every concrete context has it
+            p = ctx.Process(target=_worker_main, args=(child, func), name="meshplan-batch-worker", daemon=False)  # type: ignore[attr-defined]
             p.start()
         child.close()
         w = _Worker(p, parent)
@@ -643,6 +644,7 @@ def _run_local(
                 if w.conn not in ready and w.process.sentinel not in ready:
                     continue
                 index = w.job
+                assert index is not None  # busy workers have a job
                 outcome = None
                 try:
                     # a result sent just before the worker exited is still in the pipe

@@ -25,6 +25,7 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .errors import InputError
 
@@ -47,13 +48,13 @@ def truth_to_plan(plan: dict, truth: dict) -> np.ndarray:
     return m @ t
 
 
-def _map_xz(p: np.ndarray, xz: np.ndarray, y: float) -> np.ndarray:
+def _map_xz(p: np.ndarray, xz: ArrayLike, y: float) -> np.ndarray:
     xz = np.asarray(xz, dtype=np.float64).reshape(-1, 2)
     pts = np.c_[xz[:, 0], np.full(len(xz), y), xz[:, 1], np.ones(len(xz))] @ p.T
     return pts[:, [0, 2]]
 
 
-def _map_dir(p: np.ndarray, d: np.ndarray) -> np.ndarray:
+def _map_dir(p: np.ndarray, d: ArrayLike) -> np.ndarray:
     d = np.asarray(d, dtype=np.float64).reshape(-1, 2)
     v = np.c_[d[:, 0], np.zeros(len(d)), d[:, 1]] @ p[:3, :3].T
     v = v[:, [0, 2]]
@@ -135,16 +136,16 @@ def room_scores(plan_rooms: list[dict], truth: dict, p: np.ndarray) -> dict[str,
             iou = cp.intersection(poly).area / cp.union(poly).area
             if iou > best_iou:
                 best, best_iou = r, iou
-        ok = best is not None and best_iou >= ROOM_IOU
-        found += ok
+        match = best if best is not None and best_iou >= ROOM_IOU else None
+        found += match is not None
         rows.append(
             {
                 "room": t["label"],
                 "story": t["story"],
                 "true_area": t["area"],
-                "computed_label": best["label"] if ok else None,
-                "computed_area": best["area"] if ok else None,
-                "error_pct": 100.0 * (t["area"] - best["area"]) / t["area"] if ok else None,
+                "computed_label": match["label"] if match is not None else None,
+                "computed_area": match["area"] if match is not None else None,
+                "error_pct": 100.0 * (t["area"] - match["area"]) / t["area"] if match is not None else None,
                 "iou": best_iou,
             }
         )

@@ -257,6 +257,7 @@ def _scale_related(a: Assessment) -> bool:
     (or scale) rather than, say, a missing floor in a scan of plausible size."""
     if a.orientation is not None:
         return a.grade() != "ordinary"
+    assert a.error is not None  # orienting failed
     return "implausible" in a.error.problem
 
 
@@ -281,6 +282,7 @@ def _check_up(mesh: Mesh, chosen: Assessment, params: OrientParams) -> None:
     if abs(float(named @ found)) >= np.cos(np.radians(SAME_AXIS_DEG)):
         return  # the same axis: nothing to contradict
     if chosen.orientation is None:
+        assert chosen.error is not None  # orienting failed
         along = chosen.error.problem
     elif not has_ceiling:
         along = f"no floor below a ceiling along {params.up[1]}"
@@ -334,6 +336,7 @@ def orient_plausibly(mesh: Mesh, units: str, params: OrientParams, units_explici
         _check_up(mesh, chosen, params)
     building = chosen.orientation is not None and not chosen.no_building
     if building and chosen.grade() == "ordinary":
+        assert chosen.orientation is not None  # a building was oriented
         return chosen.orientation, ()
     # a hall: up to HALL_MAX_M, or as tall as orientation allows (max_story_height_m) when the
     # user named the units, if no other unit explains it
@@ -351,13 +354,15 @@ def orient_plausibly(mesh: Mesh, units: str, params: OrientParams, units_explici
                 others.append(a)
     others.sort(key=lambda a: max(abs(np.log(h / TYPICAL_STORY_M)) for h in a.heights))
     best = others[0] if others else None
-    if hall and best is None:
-        return chosen.orientation, ()  # a hall: no other unit explains it
-    if hall and units_explicit:
-        return chosen.orientation, (
-            f"stories of {max(chosen.heights):.2f} m taken for a tall hall in {UNIT_NAMES[units]}, as --units says; "
-            f"in {UNIT_NAMES[best.units]} they would be {max(best.heights):.2f} m",
-        )
+    if hall:
+        assert chosen.orientation is not None  # a hall is a building, which was oriented
+        if best is None:
+            return chosen.orientation, ()  # a hall: no other unit explains it
+        if units_explicit:
+            return chosen.orientation, (
+                f"stories of {max(chosen.heights):.2f} m taken for a tall hall in {UNIT_NAMES[units]}, as --units says; "
+                f"in {UNIT_NAMES[best.units]} they would be {max(best.heights):.2f} m",
+            )
     if best is not None:
         if hall:
             raise GeometryError(
@@ -366,12 +371,16 @@ def orient_plausibly(mesh: Mesh, units: str, params: OrientParams, units_explici
                 f"pass --units {best.units}, or --units {units} if it is a hall",
             )
         # what orienting in the chosen units ran into (an implausible scale, ...) comes first
-        found = f"{chosen.error.problem}: " if chosen.orientation is None else ""
+        found = ""
+        if chosen.orientation is None:
+            assert chosen.error is not None  # orienting failed
+            found = f"{chosen.error.problem}: "
         raise GeometryError(
             f"{found}the scan looks like it is in {UNIT_NAMES[best.units]} ({best.describe(units)})",
             f"pass --units {best.units}" + (f" (or --units {units} if it is a hall that tall)" if hall_hint else ""),
         )
     if chosen.orientation is None:
+        assert chosen.error is not None  # orienting failed
         if _scale_related(chosen):
             raise GeometryError(
                 chosen.error.problem,

@@ -35,7 +35,7 @@ def logs_above_live_display() -> Iterator[None]:
     real = proxy.rich_proxied_file
     moved = [h for h in logging.getLogger().handlers if isinstance(h, logging.StreamHandler) and h.stream is real]
     for h in moved:
-        h.setStream(proxy)  # type: ignore[arg-type]
+        h.setStream(proxy)
     try:
         yield
     finally:

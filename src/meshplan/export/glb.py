@@ -3,6 +3,8 @@ flat walls, and the annotations as small coloured markers with their probes."""
 
 from __future__ import annotations
 
+from typing import cast
+
 import numpy as np
 
 from ..geometry import Annotations, Mesh
@@ -40,7 +42,7 @@ def annotation_markers(annotations: Annotations, radius_m: float = 0.06, probe_m
         if np.all(np.isfinite(d)):
             seg = np.array([p, p + probe_m * d])
             parts.append(trimesh.creation.cylinder(radius=radius_m / 4, segment=seg, sections=8))
-        m = trimesh.util.concatenate(parts)
+        m = cast(trimesh.Trimesh, trimesh.util.concatenate(parts))  # meshes in, one mesh out
         m.visual = trimesh.visual.ColorVisuals(m, face_colors=np.tile(np.array(KIND_RGBA.get(kind, KIND_RGBA["other"]), dtype=np.uint8), (len(m.faces), 1)))
         out.append((f"{label} ({kind})", m))
     return out

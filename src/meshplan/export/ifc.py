@@ -13,7 +13,7 @@ frame turned upright; seen from above it looks like the drawings.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -78,7 +78,7 @@ def ifc_bytes(result: Result) -> bytes:
         storeys[s.index] = (st, s)
 
     # walls
-    ifc_walls = []
+    ifc_walls: list[Any] = []  # ifcopenshell entity instances
     for pw in result.physical_walls:
         st, s = storeys[pw.story]
         wall = root.create_entity(f, ifc_class="IfcWall", name=f"Wall {len(ifc_walls) + 1}")

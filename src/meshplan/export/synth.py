@@ -53,6 +53,7 @@ def write_synthetic(scan, output: Path, fmt: str = "obj", force: bool = False) -
         else:
             tm = trimesh.Trimesh(scan.mesh.vertices, scan.mesh.faces, process=False)
             data = tm.export(file_type=fmt)
+            assert isinstance(data, (bytes, str))  # single-file formats: only multi-file exports give a dict
             (tmp / name).write_bytes(data if isinstance(data, bytes) else data.encode())
         (tmp / "annotations.json").write_text(json.dumps(annotations_document(scan.annotations), indent=2) + "\n")
         (tmp / "truth.json").write_text(json.dumps(scan.truth, indent=1) + "\n")

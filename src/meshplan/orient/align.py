@@ -63,7 +63,9 @@ def _azimuth_peak(normals: FloatArray, weights: FloatArray) -> tuple[float, floa
     """The heaviest azimuth (radians) of the normals and its weight within +-5 degrees."""
     az = np.degrees(_azimuth(normals)) % 360.0
     hist = np.bincount(np.floor(az).astype(np.int64) % 360, weights=weights, minlength=360)
-    smooth = sum(np.roll(hist, k) for k in range(-5, 6))
+    smooth = np.roll(hist, -5)
+    for k in range(-4, 6):
+        smooth = smooth + np.roll(hist, k)
     j = int(np.argmax(smooth))
     return np.radians(j + 0.5), float(smooth[j])
 
@@ -120,8 +122,8 @@ def align_walls(normals: FloatArray, areas: FloatArray, heights: FloatArray, flo
     largest = int(order[0])
     yaw = float(_azimuth(horiz[largest]))
     # refine with the clusters on the right-angle lattice of the largest
-    az = _azimuth(horiz)
-    off = (az - yaw + np.pi / 4) % (np.pi / 2) - np.pi / 4
+    azimuths = _azimuth(horiz)
+    off = (azimuths - yaw + np.pi / 4) % (np.pi / 2) - np.pi / 4
     lattice = (np.abs(off) < np.radians(5.0)) & (ww > 0)
     if lattice.sum() >= 2:
         yaw = yaw + float(np.arctan2((ww[lattice] * np.sin(4 * off[lattice])).sum(), (ww[lattice] * np.cos(4 * off[lattice])).sum()) / 4)

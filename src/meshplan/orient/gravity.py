@@ -408,9 +408,9 @@ def refine_with_slabs(
             break
         a = areas[idx]
         wsum = np.bincount(k, weights=a, minlength=len(slabs))
-        means = np.stack([np.bincount(k, weights=a * centroids[idx, d], minlength=len(slabs)) for d in range(3)], axis=1)
+        sums = np.stack([np.bincount(k, weights=a * centroids[idx, d], minlength=len(slabs)) for d in range(3)], axis=1)
         with np.errstate(invalid="ignore", divide="ignore"):
-            means = means / wsum[:, None]
+            means = sums / wsum[:, None]
         x = centroids[idx] - means[k]
         scatter = (x * a[:, None]).T @ x
         vals, vecs = np.linalg.eigh(scatter)

@@ -15,6 +15,7 @@ around its spike, which is far finer than the bucket.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import cast
 
 import numpy as np
 
@@ -82,7 +83,8 @@ def altitude_histogram(heights: FloatArray, weights: FloatArray, bucket_m: float
     lo = np.floor(heights.min() / bucket_m) - 1
     hi = np.floor(heights.max() / bucket_m) + 2
     idx = (np.floor(heights / bucket_m) - lo).astype(np.int64)
-    hist = np.bincount(idx, weights=weights, minlength=int(hi - lo))
+    # with weights bincount returns float64 (the stubs say intp whatever the weights)
+    hist = cast(FloatArray, np.bincount(idx, weights=weights, minlength=int(hi - lo)))
     edges = (lo + np.arange(len(hist) + 1)) * bucket_m
     return edges, hist
 
@@ -150,10 +152,11 @@ def _choose_stories(spikes: list[Spike], lo: float, hi: float) -> list[tuple[int
     pairs = []
     j = m
     while j > 0:
-        if choice[j] is None:
+        step = choice[j]
+        if step is None:
             j -= 1
         else:
-            f, c = choice[j]
+            f, c = step
             pairs.append((f, c))
             j = f
     return pairs[::-1]

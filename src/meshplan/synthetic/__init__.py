@@ -50,7 +50,8 @@ def _bad(field: str, value: object, want: str) -> ParameterError:
 
 def _pair(name: str, value: object, lo: float, hi: float) -> tuple[float, float]:
     try:
-        a, b = (float(x) for x in value)  # type: ignore[union-attr]
+        # value is whatever the caller gave: not iterable is one of the TypeErrors caught below
+        a, b = (float(x) for x in value)  # type: ignore[attr-defined]
     except (TypeError, ValueError):
         raise _bad(name, value, "a pair (min, max) of numbers") from None
     if not (np.isfinite(a) and np.isfinite(b) and lo <= a <= b <= hi):

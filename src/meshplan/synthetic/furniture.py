@@ -222,8 +222,8 @@ def place_furniture(b: Building, markers: list[Marker], rng: np.random.Generator
             tall[b.walls[m.wall].room].append(_zone(b, m.wall, m.u_m - 0.3, m.u_m + 0.3, 0.6))
     for st in b.stairs:
         always[st.room].append(_rect(st.opening, 0.3))
-    for room, rect in b.floor_openings:
-        always[room].append(_rect(rect, 0.3))
+    for above, rect in b.floor_openings:
+        always[above].append(_rect(rect, 0.3))
     inside = {r: Polygon(room.polygon).buffer(-0.01, join_style="mitre") for r, room in enumerate(b.rooms)}
     placed: dict[int, list[Polygon]] = {r: [] for r in range(len(b.rooms))}
     room_walls = {}

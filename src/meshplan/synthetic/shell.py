@@ -55,8 +55,8 @@ def shell_pieces(b: Building, bevel_m: float, missing: list[Missing], holes: lis
     for h in holes:
         holes_by.setdefault((h.surface, h.index), []).append((h.center[0], h.center[1], h.radii[0], h.radii[1], h.angle_rad))
     floor_cuts: dict[int, list[tuple]] = {}
-    for room, (x0, x1, z0, z1) in b.floor_openings:
-        floor_cuts.setdefault(room, []).append((x0, x1, z0, z1))
+    for above, (x0, x1, z0, z1) in b.floor_openings:
+        floor_cuts.setdefault(above, []).append((x0, x1, z0, z1))
     ceiling_cuts: dict[int, list[tuple]] = {}
     for st in b.stairs:
         ceiling_cuts.setdefault(st.room, []).append(st.opening)

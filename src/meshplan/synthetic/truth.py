@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any, cast
+
 import numpy as np
 
 from ..geometry import Annotations, FloatArray, Mesh
@@ -124,6 +126,6 @@ def build_truth(
         "vertices": mesh.n_vertices,
     }
     assert all(signed_area(r.polygon) < 0 for r in b.rooms)
-    out = _r(truth)
+    out = cast(dict[str, Any], _r(truth))  # _r maps a dict to a dict
     out["transform"] = transform.tolist()  # full precision: mapping the scan back must be exact
     return out

@@ -3,12 +3,18 @@ fitting, rectangle construction and mesh replacement.
 
 For each story and wall direction, the centroids of the triangles facing that way are clustered
 by :func:`~meshplan.walls.boxdbscan.box_dbscan` in wall coordinates (along the wall, across it,
-up). A cluster is a *wall segment*; it is kept when it is long enough and reaches near the floor
-and near the ceiling (or, above the first story, continues a wall of the story below in the same
-plane: a double-height wall whose top the scanner did not reach). Its plane faces the wall direction and passes through the area-weighted
-median of the centroids across the wall; its rectangle spans the segment's triangles along the
-wall and in height. Coplanar rectangles of one direction separated by less than ``merge_gap_m``
-are one wall, so that a door or a missing strip does not split it (an addition to the paper).
+up). A cluster is a *wall segment*. The paper keeps a segment when it is long enough and reaches
+near the floor and near the ceiling; here (issue 9) each segment is cut into columns and only
+its runs of columns with the evidence of a wall are kept (:mod:`meshplan.walls.evidence`): a top
+that reaches the ceiling or, where none was scanned near it, the top of what was scanned around
+it, a height above any work surface, no counter or desk top attached behind its top edge, no
+surface facing the same way behind it (or, above the first story, a continuation of a wall of
+the story below in the same plane: a double-height wall whose top the scanner did not reach).
+A run must be long enough and come near the floor. Its plane faces the wall direction and
+passes through the area-weighted median of the centroids across the wall; its rectangle spans
+its triangles along the wall and in height. Faces larger than half a box are split first, so
+that the centroids of parametric models (two triangles a wall) sample their surfaces. Coplanar rectangles of one direction
+separated by less than ``merge_gap_m`` are one wall, so that a door or a missing strip does not split it (an addition to the paper).
 """
 
 from __future__ import annotations
@@ -18,8 +24,23 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..geometry import FloatArray, IntArray, Mesh
-from ..orient import Orientation, Story
+from ..orient import Orientation
 from .boxdbscan import box_dbscan
+from .evidence import (
+    MIN_COLUMN_SPAN_SHARE,
+    MIN_TOP_SHARE,
+    SPLIT_SHARE,
+    Columns,
+    StoryRaster,
+    columns,
+    hidden_behind,
+    local_top,
+    neighbour_max,
+    runs,
+    story_raster,
+    subdivide,
+    top_attached,
+)
 from .params import WallParams
 
 
@@ -234,6 +255,12 @@ def _continues(below: list[dict], direction: int, offset: FloatArray, u_lo: Floa
 def find_flat_walls(mesh: Mesh, orientation: Orientation, params: WallParams | None = None) -> FlatWalls:
     """Flat walls of every story of an oriented mesh.
 
+    Each DBSCAN segment is cut into columns and only its runs of columns that show the evidence
+    of a wall become walls (see :mod:`meshplan.walls.evidence`): a top that reaches the ceiling
+    or, where none was scanned near it, the top of what was scanned around it; a height above
+    any work surface; no counter or desk top attached behind its top edge; no surface facing
+    the same way behind it.
+
     Parameters
     ----------
     mesh
@@ -245,17 +272,29 @@ def find_flat_walls(mesh: Mesh, orientation: Orientation, params: WallParams | N
     """
     params = params or WallParams()
     dirs = wall_directions(orientation, params.wall_directions)
-    normals, centroids, areas = mesh.face_normals, mesh.face_centroids, mesh.face_areas
-    tri = mesh.triangles
+    # DBSCAN counts centroids: faces larger than the box (parametric models) are split so that
+    # the centroids sample the surface evenly; dense scans are left as they are
+    tri, parent = subdivide(mesh.triangles, SPLIT_SHARE * params.box_length_m)
+    normals = mesh.face_normals[parent]
+    centroids = tri.mean(axis=1)
+    cross = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    areas = 0.5 * np.linalg.norm(cross, axis=1)
+    face_story = orientation.face_story[parent]
+    width = params.box_length_m / 2  # columns: the resolution along the wall of a DBSCAN box
     cos_tol = np.cos(np.radians(params.facing_tolerance_deg))
-    face_segment = np.full(mesh.n_faces, -1, dtype=np.int64)
+    piece_segment = np.full(len(tri), -1, dtype=np.int64)
     seg_story: list[int] = []
     seg_kept: list[bool] = []
     rows: list[dict] = []
     below: list[dict] = []  # walls of the story below that reach its ceiling
     for story in orientation.stories:
         first = len(rows)
-        in_story = (orientation.face_story == story.index) & (centroids[:, 1] > story.floor) & (centroids[:, 1] < story.ceiling)
+        ceiling = story.ceiling if story.ceiling_found else None
+        # without a scanned ceiling the assumed one bounds nothing: the story's faces go up to
+        # its top boundary (the next story, or the top of the scan)
+        in_story = (face_story == story.index) & (centroids[:, 1] > story.floor) & (centroids[:, 1] < (story.ceiling if ceiling is not None else story.top))
+        story_faces = np.flatnonzero(face_story == story.index)
+        raster = story_raster(tri[story_faces], normals[story_faces], story.floor, ceiling)
         height = params.box_height_m or story.height
         half = np.array([params.box_length_m / 2, params.box_depth_m / 2, height / 2])
         for d_index, d in enumerate(dirs):
@@ -272,32 +311,46 @@ def find_flat_walls(mesh: Mesh, orientation: Orientation, params: WallParams | N
                 continue
             ok = labels >= 0
             lab, fidx = labels[ok], idx[ok]
-            face_segment[fidx] = lab + len(seg_story)
             verts = tri[fidx]  # (n, 3, 3)
-            u_lo, u_hi = _group_minmax(np.repeat(lab, 3), (verts @ t3).reshape(-1), k)
-            y_lo, y_hi = _group_minmax(np.repeat(lab, 3), verts[..., 1].reshape(-1), k)
+            vu = verts @ t3
             offset = _group_weighted_median(lab, pts[ok, 1], areas[fidx], k)
-            support = np.bincount(lab, minlength=k)
-            area = np.bincount(lab, weights=areas[fidx], minlength=k)
-            keep = (
-                (u_hi - u_lo >= params.min_wall_length_m)
-                & (y_lo <= story.floor + params.floor_reach_m)
-                & ((y_hi >= story.ceiling - params.ceiling_reach_m) | _continues(below, d_index, offset, u_lo, u_hi, params))
-            )
-            seg_story.extend([story.index] * k)
-            seg_kept.extend(keep.tolist())
+            u_lo, u_hi = _group_minmax(np.repeat(lab, 3), vu.reshape(-1), k)
+            cols = columns(lab, pts[ok, 0], vu, verts[..., 1], offset, width)
+            wall, neutral = _wall_columns(cols, raster, d, story.floor, ceiling, width, params)
+            wall |= _continues(below, d_index, offset, u_lo, u_hi, params)[cols.segment]
+            run = runs(cols, wall, neutral)
+            n_runs = int(run.max()) + 1
+            # sub-segments: each run of wall columns, then the rest of each DBSCAN segment
+            sub_of_col = np.where(run >= 0, run, n_runs + cols.segment)
+            sub = sub_of_col[cols.face_column]
+            m = n_runs + k
+            p_lo, p_hi = _group_minmax(np.repeat(sub, 3), vu.reshape(-1), m)
+            y_lo, y_hi = _group_minmax(np.repeat(sub, 3), verts[..., 1].reshape(-1), m)
+            p_off = _group_weighted_median(sub, pts[ok, 1], areas[fidx], m)
+            # support: the faces of the mesh (not their pieces) in each sub-segment
+            pairs = np.unique(sub * np.int64(mesh.n_faces) + parent[fidx])
+            support = np.bincount(pairs // mesh.n_faces, minlength=m)
+            area = np.bincount(sub, weights=areas[fidx], minlength=m)
+            present = np.bincount(sub, minlength=m) > 0
+            keep = np.zeros(m, dtype=bool)
+            keep[:n_runs] = (p_hi[:n_runs] - p_lo[:n_runs] >= params.min_wall_length_m) & (y_lo[:n_runs] <= story.floor + params.floor_reach_m)
+            # ids of the sub-segments that exist, in order
+            ids = np.cumsum(present) - 1 + len(seg_story)
+            piece_segment[fidx] = ids[sub]
+            seg_story.extend([story.index] * int(present.sum()))
+            seg_kept.extend(keep[present].tolist())
             found = [
                 {
                     "story": story.index,
                     "direction": d_index,
-                    "offset": float(offset[j]),
-                    "u_min": float(u_lo[j]),
-                    "u_max": float(u_hi[j]),
+                    "offset": float(p_off[j]),
+                    "u_min": float(p_lo[j]),
+                    "u_max": float(p_hi[j]),
                     "bottom": float(y_lo[j]),
                     "top": float(y_hi[j]),
                     "support": int(support[j]),
                     "area": float(area[j]),
-                    "segments": [int(j) + len(seg_story) - k],
+                    "segments": [int(ids[j])],
                 }
                 for j in np.flatnonzero(keep)
             ]
@@ -307,6 +360,10 @@ def find_flat_walls(mesh: Mesh, orientation: Orientation, params: WallParams | N
     segment_wall = np.full(len(seg_story), -1, dtype=np.int64)
     for w, r in enumerate(rows):
         segment_wall[r["segments"]] = w
+    # a face split into pieces takes the segment of its first piece in a segment
+    face_segment = np.full(mesh.n_faces, -1, dtype=np.int64)
+    labelled = np.flatnonzero(piece_segment >= 0)[::-1]
+    face_segment[parent[labelled]] = piece_segment[labelled]
     col = lambda key, dtype=np.float64: np.array([r[key] for r in rows], dtype=dtype)  # noqa: E731
     return FlatWalls(
         story=col("story", np.int64),
@@ -325,3 +382,28 @@ def find_flat_walls(mesh: Mesh, orientation: Orientation, params: WallParams | N
         segment_kept=np.array(seg_kept, dtype=bool),
         segment_wall=segment_wall,
     )
+
+
+def _wall_columns(
+    cols: Columns, raster: StoryRaster, normal: FloatArray, floor: float, ceiling: float | None, width: float, params: WallParams
+) -> tuple[np.ndarray, np.ndarray]:
+    """Which columns show the evidence of a wall, and which are neutral (see
+    :mod:`meshplan.walls.evidence`).
+
+    The top a column must reach is the highest thing scanned in front of it or behind it (the
+    ceiling near it, capped at the story's ceiling, or the top of the scan where there is no
+    ceiling), or its own top where nothing around is higher: a top lost in unscanned space.
+    A column that reaches it with nothing against it but too short a height seen (the lintel
+    over a door, a wall seen only near its top) is neutral.
+    """
+    top = neighbour_max(cols, cols.top)
+    target = np.maximum(local_top(raster, normal, cols, width, params.context_m, params.max_wall_thickness_m), top)
+    if ceiling is not None:
+        target = np.minimum(target, ceiling)
+    reaches = top >= target - params.ceiling_reach_m
+    above_work = top > floor + params.max_work_surface_m
+    seen = cols.top - cols.bottom >= MIN_COLUMN_SPAN_SHARE * (target - floor)
+    furniture_top = top_attached(raster, normal, cols, width) >= MIN_TOP_SHARE
+    hidden = hidden_behind(cols, params.context_m, params.max_wall_thickness_m)
+    plausible = reaches & above_work & ~furniture_top & ~hidden
+    return plausible & seen, plausible & ~seen

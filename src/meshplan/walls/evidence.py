@@ -1,0 +1,348 @@
+"""Evidence that a DBSCAN wall segment is a wall, column by column ("walls are walls").
+
+The paper keeps a segment when it reaches from near the floor to near the ceiling. On real scans
+that test fails both ways: a story without a scanned ceiling gets an assumed one (``--default-
+ceiling-height``) that its walls need not reach (the scan ends at 1.4-1.8 m, RoomPlan walls are
+2.8 m tall), and a counter front in the plane of a tall cupboard makes one segment that reaches
+the ceiling. A wall is a vertical surface that bounds a space, so each segment is cut into
+*columns* (vertical strips ``column_m`` wide along the wall) and a column is a wall where
+
+* its top reaches what is above it: the ceiling where the story has one, else the top of what
+  was scanned in front of and behind it (a wall whose top is lost in unscanned space reaches;
+  a counter front with the wall behind it scanned higher does not);
+* it rises above the highest work surface (``max_work_surface_m``) and is seen over at least
+  :data:`MIN_COLUMN_SPAN_SHARE` of that height (not a beam, a lintel or a shelf board alone);
+* nothing horizontal is attached to its top edge behind it (the top of a counter, a desk, a
+  bed, a sideboard: a front's top surface lies right behind its upper edge, on the side its
+  normal points away from);
+* no other surface facing the same way stands behind it, deeper than a wall is thick and within
+  ``context_m`` (the wall behind a cupboard or a shelf: a surface in front of a scanned wall
+  does not bound the space).
+
+The wall is then made of the runs of consecutive wall columns of each segment. Everything is
+measured on rasters of the story (:class:`StoryRaster`) and on per-column reductions, with no
+per-triangle Python loop.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..geometry import FloatArray, IntArray
+
+#: Cell of the plan rasters of a story (m): finer than a counter's depth (0.6 m) and a wall's
+#: thickness, coarser than the triangles of phone and headset scans (4-10 cm), so that each
+#: scanned surface fills its cells (every face marks the cells of its corners and centroid).
+RASTER_M = 0.1
+
+#: A face is horizontal when its normal is within this angle of up (degrees): the tops of
+#: counters, desks and beds are level to a few degrees even in a noisy scan.
+HORIZONTAL_DEG = 15.0
+
+#: Horizontal surfaces this close to the floor (m) are the floor itself (sunken parts, noise),
+#: not the top of furniture.
+FLOOR_CLEARANCE_M = 0.2
+
+#: Largest height difference (m) between a front's top edge and the horizontal surface behind
+#: it that still makes them one piece of furniture: rounded edges and the noise of headset scans
+#: (2-5 cm), not the gap between a wall's top and a shelf.
+TOP_EDGE_TOLERANCE_M = 0.08
+
+#: Where the top of a piece of furniture is sought behind its front (m across, behind the face):
+#: from just behind the front (its edge is rounded over about 5 cm) to the depth of a shallow
+#: desk (0.5 m); shelves (0.3 m) and counters (0.6 m) cover most of it.
+TOP_SEARCH_M = (0.05, 0.5)
+
+#: Share of the search strip behind a column's top edge that a horizontal surface at that
+#: height must cover for the column to be a front of furniture: a counter or desk top covers
+#: nearly all of it, the odd level triangle of a noisy wall top very little.
+MIN_TOP_SHARE = 0.3
+
+#: A column is seen over at least this share of the height it must rise to (from the floor to
+#: the top it must reach): a wall behind furniture is hidden below counter height at most, a
+#: beam, a lintel or a shelf board is a thin band.
+MIN_COLUMN_SPAN_SHARE = 0.5
+
+#: A surface behind a column hides it only when it is seen over at least this height (m): a
+#: strip of the wall behind a counter (its backsplash) or a cupboard, not a skirting board or a
+#: window sill.
+MIN_BEHIND_SPAN_M = 0.3
+
+#: Faces are split until no edge is longer than this share of the DBSCAN box length: DBSCAN
+#: counts triangle centroids, which stand for the scanned surface only when triangles are
+#: smaller than the box (a parametric RoomPlan or Quest wall is two triangles).
+SPLIT_SHARE = 0.5
+
+#: Most pieces an edge of one face is split into (n^2 triangles per face): a 64-way split of a
+#: 0.23 m target covers edges up to 15 m, longer than any single wall rectangle.
+MAX_SPLIT = 64
+
+
+def subdivide(triangles: FloatArray, max_edge_m: float) -> tuple[FloatArray, IntArray]:
+    """Split every face with an edge longer than ``max_edge_m`` into ``n^2`` equal triangles.
+
+    Parameters
+    ----------
+    triangles
+        ``(F, 3, 3)`` corners.
+    max_edge_m
+        Longest edge wanted (m); each face is split ``n = ceil(longest edge / max_edge_m)``
+        ways along each edge (at most :data:`MAX_SPLIT`).
+
+    Returns
+    -------
+    pieces, parent
+        ``(P, 3, 3)`` corners of the pieces (faces that needed no split are kept first, in
+        order) and ``(P,)`` the face each piece comes from.
+    """
+    edges = np.linalg.norm(triangles - np.roll(triangles, 1, axis=1), axis=2).max(axis=1)
+    n_split = np.clip(np.ceil(edges / max_edge_m), 1, MAX_SPLIT).astype(np.int64)
+    keep = np.flatnonzero(n_split == 1)
+    pieces = [triangles[keep]]
+    parents = [keep]
+    for n in np.unique(n_split[n_split > 1]):
+        idx = np.flatnonzero(n_split == n)
+        bary = _split_template(int(n))  # (n^2, 3, 3) barycentric corners
+        sub = np.einsum("pkj,fjd->fpkd", bary, triangles[idx]).reshape(-1, 3, 3)
+        pieces.append(sub)
+        parents.append(np.repeat(idx, len(bary)))
+    return np.concatenate(pieces), np.concatenate(parents).astype(np.int64)
+
+
+def _split_template(n: int) -> FloatArray:
+    """Barycentric corners ``(n^2, 3, 3)`` of the regular ``n``-way split of a triangle."""
+    i, j = np.meshgrid(np.arange(n), np.arange(n), indexing="ij")
+    up = i + j < n  # upright triangles (i, j), (i+1, j), (i, j+1)
+    down = i + j < n - 1  # inverted ones (i+1, j), (i+1, j+1), (i, j+1)
+    corners = []
+    for di, dj, mask in (((0, 1, 0), (0, 0, 1), up), ((1, 1, 0), (0, 1, 1), down)):
+        a = np.stack([i[mask] + di[k] for k in range(3)], axis=1)
+        b = np.stack([j[mask] + dj[k] for k in range(3)], axis=1)
+        corners.append(np.stack([n - a - b, a, b], axis=2) / n)  # weights of corners 0, 1, 2
+    return np.concatenate(corners).astype(np.float64)
+
+
+@dataclass(frozen=True)
+class StoryRaster:
+    """Plan rasters (x, z) of one story, :data:`RASTER_M` cells.
+
+    Attributes
+    ----------
+    top
+        Highest scanned point in each cell (m; ``-inf`` where nothing was scanned), capped at
+        the ceiling where the story has one (stray triangles above it are not the room).
+    shelf
+        Highest level, upward-facing surface in each cell above the floor and below the ceiling
+        (m; ``nan`` where none): the tops of counters, desks, beds and shelves.
+    """
+
+    x0: float
+    z0: float
+    top: FloatArray
+    shelf: FloatArray
+
+    def sample(self, grid: FloatArray, x: FloatArray, z: FloatArray, outside: float) -> FloatArray:
+        """Values of ``grid`` at plan points, ``outside`` beyond the raster."""
+        i = np.floor((x - self.x0) / RASTER_M).astype(np.int64)
+        k = np.floor((z - self.z0) / RASTER_M).astype(np.int64)
+        ok = (i >= 0) & (i < grid.shape[0]) & (k >= 0) & (k < grid.shape[1])
+        out = np.full(np.shape(x), outside, dtype=np.float64)
+        out[ok] = grid[i[ok], k[ok]]
+        return out
+
+
+def story_raster(triangles: FloatArray, normals: FloatArray, floor: float, ceiling: float | None) -> StoryRaster:
+    """The rasters of a story from its faces.
+
+    Parameters
+    ----------
+    triangles, normals
+        ``(F, 3, 3)`` corners and ``(F, 3)`` unit normals of the story's faces (plan frame).
+    floor
+        Floor height (m).
+    ceiling
+        Ceiling height where one was scanned, else ``None``.
+    """
+    if not len(triangles):
+        return StoryRaster(0.0, 0.0, np.full((1, 1), -np.inf), np.full((1, 1), np.nan))
+    centroid = triangles.mean(axis=1)
+    points = np.concatenate([triangles, centroid[:, None]], axis=1)  # corners and centroid mark cells
+    x0, z0 = points[..., 0].min(), points[..., 2].min()
+    i = np.floor((points[..., 0] - x0) / RASTER_M).astype(np.int64)
+    k = np.floor((points[..., 2] - z0) / RASTER_M).astype(np.int64)
+    shape = (int(i.max()) + 1, int(k.max()) + 1)
+    cell = i * shape[1] + k  # (F, 4)
+    height = points[..., 1] if ceiling is None else np.minimum(points[..., 1], ceiling)
+    top = np.full(shape[0] * shape[1], -np.inf)
+    np.maximum.at(top, cell.reshape(-1), height.reshape(-1))
+    level = normals[:, 1] >= np.cos(np.radians(HORIZONTAL_DEG))
+    level &= centroid[:, 1] > floor + FLOOR_CLEARANCE_M
+    if ceiling is not None:
+        level &= centroid[:, 1] < ceiling - FLOOR_CLEARANCE_M
+    shelf = np.full(shape[0] * shape[1], -np.inf)
+    np.maximum.at(shelf, cell[level].reshape(-1), np.repeat(centroid[level, 1], 4))
+    shelf[np.isinf(shelf)] = np.nan
+    return StoryRaster(float(x0), float(z0), top.reshape(shape), shelf.reshape(shape))
+
+
+@dataclass(frozen=True)
+class Columns:
+    """Vertical strips of the segments of one wall direction (one row per column).
+
+    ``segment``, ``bin`` (index along the wall, ``floor(u / width)``), ``u_lo``/``u_hi``
+    (extent along the wall of its faces), ``bottom``/``top`` (heights of its faces) and
+    ``offset`` (its segment's plane); ``face_column`` is the column of every face.
+    """
+
+    segment: IntArray
+    bin: IntArray
+    u_lo: FloatArray
+    u_hi: FloatArray
+    bottom: FloatArray
+    top: FloatArray
+    offset: FloatArray
+    face_column: IntArray
+
+    def __len__(self) -> int:
+        return int(len(self.segment))
+
+
+def columns(labels: IntArray, u: FloatArray, vertex_u: FloatArray, vertex_y: FloatArray, offset: FloatArray, width_m: float) -> Columns:
+    """Cut segments into columns ``width_m`` wide along the wall.
+
+    Parameters
+    ----------
+    labels
+        ``(n,)`` segment of each face.
+    u
+        ``(n,)`` position of each face's centroid along the wall (m): it picks the column.
+    vertex_u, vertex_y
+        ``(n, 3)`` positions along the wall and heights of each face's corners.
+    offset
+        ``(k,)`` plane of each segment (across the wall, m).
+    width_m
+        Column width (m).
+    """
+    b = np.floor(u / width_m).astype(np.int64)
+    span = int(b.max() - b.min()) + 1
+    flat, face_column = np.unique(labels * span + (b - b.min()), return_inverse=True)  # 1-D keys: fast
+    face_column = face_column.reshape(-1)
+    keys = np.c_[flat // span, flat % span + b.min()]
+    m = len(keys)
+    rep = np.repeat(face_column, 3)
+    u_lo, u_hi, y_lo, y_hi = np.full(m, np.inf), np.full(m, -np.inf), np.full(m, np.inf), np.full(m, -np.inf)
+    np.minimum.at(u_lo, rep, vertex_u.reshape(-1))
+    np.maximum.at(u_hi, rep, vertex_u.reshape(-1))
+    np.minimum.at(y_lo, rep, vertex_y.reshape(-1))
+    np.maximum.at(y_hi, rep, vertex_y.reshape(-1))
+    return Columns(keys[:, 0], keys[:, 1], u_lo, u_hi, y_lo, y_hi, offset[keys[:, 0]], face_column)
+
+
+def _region(raster: StoryRaster, grid: FloatArray, normal: FloatArray, cols: Columns, width_m: float, across: FloatArray, outside: float) -> FloatArray:
+    """``(m, s)`` raster values at samples of each column: 3 along it, ``across`` (m, positive
+    into the room) from its plane."""
+    tangent = np.array([-normal[1], normal[0]])
+    centre = (cols.bin + 0.5) * width_m
+    along = centre[:, None] + np.array([-1 / 3, 0.0, 1 / 3]) * width_m  # (m, 3)
+    a = cols.offset[:, None, None] + across[None, None, :]  # (m, 1, s)
+    x = along[:, :, None] * tangent[0] + a * normal[0]
+    z = along[:, :, None] * tangent[1] + a * normal[1]
+    return raster.sample(grid, x, z, outside).reshape(len(cols), -1)
+
+
+def local_top(raster: StoryRaster, normal: FloatArray, cols: Columns, width_m: float, context_m: float, thickness_m: float) -> FloatArray:
+    """Top of what was scanned in front of each column and behind it beyond the wall's thickness
+    (m; ``-inf`` where nothing was), within ``context_m``: what the column's top must reach. The
+    other face of the wall itself, which another room may show higher, is left out."""
+    step = RASTER_M / 2
+    front = np.arange(step, context_m + 1e-9, step)
+    behind = -np.arange(thickness_m + step, context_m + 1e-9, step)
+    return _region(raster, raster.top, normal, cols, width_m, np.r_[front, behind], -np.inf).max(axis=1)
+
+
+def top_attached(raster: StoryRaster, normal: FloatArray, cols: Columns, width_m: float) -> FloatArray:
+    """Share of the strip behind each column's top edge (:data:`TOP_SEARCH_M`) covered by a level
+    surface at the height of that edge (within :data:`TOP_EDGE_TOLERANCE_M`)."""
+    behind = -np.arange(TOP_SEARCH_M[0], TOP_SEARCH_M[1] + 1e-9, RASTER_M / 2)
+    shelf = _region(raster, raster.shelf, normal, cols, width_m, behind, np.nan)
+    with np.errstate(invalid="ignore"):
+        hit = np.abs(shelf - cols.top[:, None]) <= TOP_EDGE_TOLERANCE_M
+    return hit.mean(axis=1)
+
+
+def hidden_behind(cols: Columns, context_m: float, thickness_m: float) -> np.ndarray:
+    """Columns with a surface facing the same way behind them, deeper than ``thickness_m`` and
+    within ``context_m``, seen over :data:`MIN_BEHIND_SPAN_M`: the wall behind a cupboard, a
+    counter or a shelf, so that the column itself does not bound the space."""
+    tall = cols.top - cols.bottom >= MIN_BEHIND_SPAN_M
+    out = np.zeros(len(cols), dtype=bool)
+    if not tall.any():
+        return out
+    # per bin along the wall, the offsets of the tall columns, sorted: a window search
+    order = np.lexsort((cols.offset[tall], cols.bin[tall]))
+    tb, to = cols.bin[tall][order], cols.offset[tall][order]
+    lo = _search(tb, to, cols.bin, cols.offset - context_m, "left")
+    hi = _search(tb, to, cols.bin, cols.offset - thickness_m, "right")
+    return hi > lo
+
+
+def _search(bins: IntArray, values: FloatArray, qbin: IntArray, qvalue: FloatArray, side: str) -> IntArray:
+    """``searchsorted`` of ``(qbin, qvalue)`` in the rows ``(bins, values)`` sorted by bin, then value."""
+    start = np.searchsorted(bins, qbin, side="left")
+    end = np.searchsorted(bins, qbin, side="right")
+    out = np.empty(len(qbin), dtype=np.int64)
+    # values are sorted within each bin; offset them by the bin so one searchsorted serves all
+    span = float(np.abs(values).max() + np.abs(qvalue).max() + 1.0) * 4.0
+    key = bins * span + values
+    out[:] = np.searchsorted(key, qbin * span + qvalue, side=side)
+    return np.clip(out, start, end)
+
+
+def neighbour_max(cols: Columns, values: FloatArray) -> FloatArray:
+    """Largest of ``values`` over each column and the columns beside it in its segment (one bin
+    either side): the top of a wall is judged over about a box length, so that a patch of it
+    scanned a little lower does not break it."""
+    key = cols.segment * (int(cols.bin.max() - cols.bin.min()) + 3) + (cols.bin - cols.bin.min() + 1)
+    order = np.argsort(key)
+    sk, sv = key[order], values[order]
+    out = sv.copy()
+    for step in (-1, 1):
+        j = np.searchsorted(sk, sk + step)
+        j = np.clip(j, 0, len(sk) - 1)
+        hit = sk[j] == sk + step
+        out[hit] = np.maximum(out[hit], sv[j[hit]])
+    res = np.empty_like(out)
+    res[order] = out
+    return res
+
+
+def runs(cols: Columns, wall: np.ndarray, neutral: np.ndarray) -> IntArray:
+    """Run of wall columns of each column's segment (-1 for columns in none).
+
+    A run is a sequence of consecutive wall and *neutral* columns (too little seen to tell, such
+    as the lintel over a door: they neither start nor break a wall), trimmed to its first and
+    last wall column; any other column ends it. Columns with no faces (holes in the scan) do not
+    end a run.
+    """
+    order = np.lexsort((cols.bin, cols.segment))
+    seg, w = cols.segment[order], wall[order]
+    ok = w | neutral[order]
+    new_seg = np.r_[True, seg[1:] != seg[:-1]]
+    start = ok & (new_seg | ~np.r_[False, ok[:-1]])
+    run = np.where(ok, np.cumsum(start) - 1, -1)
+    n = int(run.max()) + 1
+    pos = np.arange(len(run))
+    first = np.full(max(n, 1), len(run))
+    last = np.full(max(n, 1), -1)
+    np.minimum.at(first, run[w], pos[w])
+    np.maximum.at(last, run[w], pos[w])
+    inside = (run >= 0) & (pos >= first[np.maximum(run, 0)]) & (pos <= last[np.maximum(run, 0)])
+    run = np.where(inside, run, -1)
+    # renumber the runs that kept a wall column, densely
+    kept = np.unique(run[run >= 0])
+    run = np.where(run >= 0, np.searchsorted(kept, run), -1)
+    out = np.empty(len(cols), dtype=np.int64)
+    out[order] = run
+    return out

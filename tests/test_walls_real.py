@@ -1,0 +1,158 @@
+"""Walls are walls (issue 9): the flat-wall stage on real scans and on small built rooms.
+
+The real-scan tests run the walls stage on each of the 13 scans with a hand-digitized truth in
+``../shared/truth`` (skipped when absent) and score it with :mod:`meshplan.evaluate_real`. The
+scan is levelled with the truth's own up direction (``up_hint``), so that these tests measure
+the walls and not the gravity search (which still turns three of these scans on their side).
+The thresholds are the level reached, with a margin; the old test ("reaches an assumed 2.5 m
+ceiling") found no wall at all in the scans without a ceiling and 7 m of furniture in the
+apartment, and fails them.
+
+The built rooms check the two halves of the issue without any file: a room without a ceiling
+whose walls stop at 1.8 m gets its four walls, and a counter (a 0.9 m box with its top) is
+not a wall.
+"""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from conftest import SHARED
+from meshplan.evaluate_real import evaluate_real
+from meshplan.geometry import Mesh
+from meshplan.io import load_mesh
+from meshplan.orient import orient
+from meshplan.orient.params import OrientParams
+from meshplan.walls import find_flat_walls
+
+TRUTH = SHARED / "truth"
+
+#: Per scan: least wall recall (``None``: fewer than 2 sure walls, not checked) and most
+#: furniture length (m) of story 0. Reached (recall / furniture): ashro 0.91 / 0.03, cuny 0.27 /
+#: 0, hemkinator 0.61 / 14.0, holosoma - / 0.39, mrtk 0.91 / 3.0, apartment 0.94 / 1.33, chroje
+#: 0.91 / 0, tatami 0.97 / 0, quest 0.97 / 0.04, library 0.98 / 2.4, small room 0.87 / 0, office
+#: 0.60 / 1.08, closed room 0.89 / 0. The old code: 0.42 / 0, 0.33 / 0, 0.62 / 18.4, - / 0,
+#: 1.0 / 6.8, 0.98 / 7.0, 0.86 / 1.8, 1.0 / 3.2, 0 / 0, 0 / 0, 0 / 0, 0 / 0, 0.63 / 1.5.
+EXPECTED = {
+    "hl1_ashro_room_45deg": (0.85, 0.5),  # no ceiling
+    "hl1_cuny_room_sparse_walls": (0.2, 0.5),
+    "hl1_hemkinator_large_hall": (0.55, 15.5),  # drifted walls, thin full-height panels
+    "hl1_holosoma_room_sparse_walls": (None, 0.6),
+    "hl1_mrtk_example_office": (0.85, 3.5),
+    "hl2_su_apartment_two_story": (0.9, 2.0),  # kitchen counters and island
+    "hl2_su_office_chroje": (0.85, 0.5),  # desks
+    "iphone_polycam_tamatebox_tatami_room": (0.9, 0.5),  # a beam at 2.0 m
+    "quest_mruk_radiotwin_lab_parametric": (0.9, 0.5),  # two triangles per wall
+    "roomplan_sekhar_library_parametric": (0.9, 3.0),  # no ceiling, walls 2.82 m
+    "roomplan_sekhar_small_room_parametric": (0.8, 0.5),  # no ceiling, walls 2.41 m
+    "tango_rainfiel_office_open": (0.5, 1.5),  # no ceiling, the scan ends at 1.77 m
+    "tango_rainfiel_room_closed": (0.8, 0.5),
+}
+
+
+def _score(stem: str) -> dict:
+    path = TRUTH / f"{stem}.truth.json"
+    if not path.is_file():
+        pytest.skip(f"truth {stem} not available (../shared/truth)")
+    truth = json.loads(path.read_text(encoding="utf-8"))
+    scan = SHARED / "scans" / truth["scan"]
+    if not scan.is_file():
+        pytest.skip(f"real scan {truth['scan']} not available (../shared/scans)")
+    mesh = load_mesh(scan, "m", None).mesh
+    up = np.asarray(truth["truth_to_input"], dtype=np.float64)[:3, :3] @ [0.0, 1.0, 0.0]
+    o = orient(mesh, OrientParams(), up_hint=up)
+    walls = find_flat_walls(mesh.transformed(o.transform).with_flipped(o.flipped), o)
+    plan = {
+        "transform": o.transform.tolist(),
+        "input": {"units": "m"},
+        "stories": [s.to_dict() for s in o.stories],
+        "walls": walls.to_list(),
+        "rooms": [],
+        "openings": [],
+    }
+    return evaluate_real(plan, truth)["stories"][0]["walls"]
+
+
+@pytest.mark.realscan
+@pytest.mark.parametrize("stem", sorted(EXPECTED))
+def test_real_scan_walls(stem: str) -> None:
+    min_recall, max_furniture = EXPECTED[stem]
+    w = _score(stem)
+    if min_recall is not None:
+        assert w["recall"] >= min_recall, w
+    assert w["furniture_length_m"] <= max_furniture, w
+
+
+# ------------------------------------------------------------------------- built rooms
+
+
+class _Builder:
+    """Vertices and faces of grids of quads (normal = du x dv, right-hand rule)."""
+
+    def __init__(self) -> None:
+        self.verts: list[np.ndarray] = []
+        self.faces: list[np.ndarray] = []
+        self.n = 0
+
+    def quad(self, origin, du, dv, cell: float = 0.1) -> None:
+        o, du, dv = (np.asarray(a, float) for a in (origin, du, dv))
+        nu = max(int(round(np.linalg.norm(du) / cell)), 1)
+        nv = max(int(round(np.linalg.norm(dv) / cell)), 1)
+        i, j = np.meshgrid(np.arange(nu + 1), np.arange(nv + 1), indexing="ij")
+        p = o + i[..., None] * du / nu + j[..., None] * dv / nv
+        idx = (i * (nv + 1) + j)[:-1, :-1].reshape(-1) + self.n
+        self.verts.append(p.reshape(-1, 3))
+        self.faces.append(np.c_[idx, idx + (nv + 1), idx + (nv + 1) + 1])
+        self.faces.append(np.c_[idx, idx + (nv + 1) + 1, idx + 1])
+        self.n += len(p.reshape(-1, 3))
+
+    def room(self, width: float, depth: float, wall_top: float, ceiling: bool) -> None:
+        """Floor, four walls up to ``wall_top``, and a ceiling there when ``ceiling``."""
+        w, d, h = width, depth, wall_top
+        self.quad([0, 0, 0], [0, 0, d], [w, 0, 0])  # floor, +y
+        if ceiling:
+            self.quad([0, h, 0], [w, 0, 0], [0, 0, d])  # ceiling, -y
+        self.quad([0, 0, 0], [w, 0, 0], [0, h, 0])  # z = 0, +z
+        self.quad([0, 0, d], [0, h, 0], [w, 0, 0])  # z = d, -z
+        self.quad([0, 0, 0], [0, h, 0], [0, 0, d])  # x = 0, +x
+        self.quad([w, 0, 0], [0, 0, d], [0, h, 0])  # x = w, -x
+
+    def counter(self, x0: float, x1: float, depth: float, height: float) -> None:
+        """A counter against the wall z = 0: its front (facing +z), top and two ends."""
+        self.quad([x0, 0, depth], [x1 - x0, 0, 0], [0, height, 0])  # front, +z
+        self.quad([x0, height, 0], [0, 0, depth], [x1 - x0, 0, 0])  # top, +y
+        self.quad([x0, 0, 0], [0, 0, depth], [0, height, 0])  # low-x end, -x
+        self.quad([x1, 0, 0], [0, height, 0], [0, 0, depth])  # high-x end, +x
+
+    def mesh(self) -> Mesh:
+        return Mesh(np.concatenate(self.verts), np.concatenate(self.faces))
+
+
+def _walls(mesh: Mesh):
+    o = orient(mesh, OrientParams(), up_hint=np.array([0.0, 1.0, 0.0]))
+    return o, find_flat_walls(mesh.transformed(o.transform).with_flipped(o.flipped), o)
+
+
+def test_room_without_ceiling_walls_to_1_8_m_gets_its_four_walls() -> None:
+    b = _Builder()
+    b.room(5.0, 4.0, 1.8, ceiling=False)
+    o, walls = _walls(b.mesh())
+    assert not o.stories[0].ceiling_found  # an assumed ceiling its walls never reach
+    assert len(walls) == 4
+    assert sorted(np.round(walls.length, 1)) == pytest.approx([4.0, 4.0, 5.0, 5.0], abs=0.15)
+    assert np.all(walls.top > 1.7)
+
+
+@pytest.mark.parametrize("ceiling", [True, False])
+def test_counter_is_not_a_wall(ceiling: bool) -> None:
+    b = _Builder()
+    b.room(5.0, 4.0, 2.6 if ceiling else 1.8, ceiling=ceiling)
+    b.counter(1.0, 3.5, depth=0.6, height=0.9)
+    _, walls = _walls(b.mesh())
+    # the four walls of the room, none in the counter front's plane (2.5 m long, 0.9 m high)
+    assert len(walls) == 4
+    assert sorted(np.round(walls.length, 1)) == pytest.approx([4.0, 4.0, 5.0, 5.0], abs=0.15)
+    assert np.all(walls.top > 1.7)
