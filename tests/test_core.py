@@ -162,12 +162,29 @@ def test_slicing_a_box_reproduces_its_walls():
 
 
 def test_slicing_is_exact_on_a_tilted_triangle():
+    """The cut points are the plane's intersections with the two edges it crosses, worked out
+    by hand (an edge midpoint or a wrong interpolation weight lands elsewhere)."""
     tri = np.array([[[0, 0, 0], [2, 1, 0], [0, 2, 2]]], float)
     s = slice_mesh(tri, [0.5, 1.0, 1.5])
-    assert len(s) == 3
-    for seg, h in zip(s.segments, [0.5, 1.0, 1.5]):
-        # points on the triangle's plane at height h: check both ends lie on its edges
-        for p in seg:
-            assert 0 <= p[0] <= 2 and 0 <= p[1] <= 2
+    assert len(s) == 3 and s.level.tolist() == [0, 1, 2] and s.face.tolist() == [0, 0, 0]
+    expected = {
+        0: {(1.0, 0.0), (0.0, 0.5)},  # y = 0.5: halfway along A-B, a quarter along A-C
+        1: {(2.0, 0.0), (0.0, 1.0)},  # y = 1.0: through B itself, halfway along A-C
+        2: {(0.0, 1.5), (1.0, 1.0)},  # y = 1.5: three quarters along A-C, halfway along B-C
+    }
+    for seg, level in zip(s.segments, s.level):
+        got = {tuple(np.round(p, 12)) for p in seg}
+        assert got == expected[int(level)], (level, seg)
     with pytest.raises(ParameterError):
         plane_heights(0, 1, 0)
+
+
+def test_slicing_an_edge_on_a_plane_gives_it_once_from_the_triangle_below():
+    """The module's rule: a vertex exactly on a plane counts as above it, so an edge lying in a
+    plane comes once, from the triangle below it, and a vertex touching it gives nothing."""
+    below = [[0, 0, 0], [2, 1, 0], [0, 1, 2]]  # its edge B-C lies in y = 1
+    above = [[2, 1, 0], [0, 1, 2], [2, 2, 2]]  # shares that edge, rises above it
+    touch = [[5, 0, 5], [6, 0, 5], [5, 1, 6]]  # touches y = 1 with one vertex
+    s = slice_mesh(np.array([below, above, touch], float), [1.0])
+    assert s.face.tolist() == [0]
+    assert {tuple(p) for p in s.segments[0]} == {(2.0, 0.0), (0.0, 2.0)}
