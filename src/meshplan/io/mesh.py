@@ -675,4 +675,6 @@ def write_mesh(mesh: Mesh, path: str | os.PathLike) -> None:
         raise ParameterError(f"cannot write mesh format {ext!r}", "use .obj, .ply, .glb, .stl or .off")
     tm = trimesh.Trimesh(mesh.vertices, mesh.faces, process=False)
     data = tm.export(file_type=MESH_FORMATS[ext])
+    if isinstance(data, dict):  # only multi-file formats (glTF with buffers) export a dict
+        raise ParameterError(f"cannot write mesh format {ext!r} as one file", "use .obj, .ply, .glb, .stl or .off")
     atomic_write_bytes(p, data if isinstance(data, bytes) else data.encode())

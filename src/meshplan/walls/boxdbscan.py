@@ -123,8 +123,9 @@ class BoxDBSCAN:
 
     half_extents: tuple[float, float, float] = (0.2286, 0.0508, 1.25)
     min_points: int = 10
-    labels_: IntArray = field(init=False, repr=False, default=None)  # type: ignore[assignment]
-    core_sample_mask_: np.ndarray = field(init=False, repr=False, default=None)  # type: ignore[assignment]
+    # fitted attributes (scikit-learn's convention): None until fit() sets them
+    labels_: IntArray = field(init=False, repr=False, default=None)  # type: ignore[arg-type]
+    core_sample_mask_: np.ndarray = field(init=False, repr=False, default=None)  # type: ignore[arg-type]
 
     def fit(self, points: ArrayLike) -> BoxDBSCAN:
         self.labels_, self.core_sample_mask_ = box_dbscan(points, self.half_extents, self.min_points)

@@ -27,6 +27,7 @@ per-triangle Python loop.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
 
@@ -288,7 +289,7 @@ def hidden_behind(cols: Columns, context_m: float, thickness_m: float) -> np.nda
     return hi > lo
 
 
-def _search(bins: IntArray, values: FloatArray, qbin: IntArray, qvalue: FloatArray, side: str) -> IntArray:
+def _search(bins: IntArray, values: FloatArray, qbin: IntArray, qvalue: FloatArray, side: Literal["left", "right"]) -> IntArray:
     """``searchsorted`` of ``(qbin, qvalue)`` in the rows ``(bins, values)`` sorted by bin, then value."""
     start = np.searchsorted(bins, qbin, side="left")
     end = np.searchsorted(bins, qbin, side="right")

@@ -65,12 +65,14 @@ def physical_walls(walls: FlatWalls, max_thickness_m: float, default_thickness_m
         centre = off[a] - gap / 2
         s = min(u) * tan[a] + centre * nor[a]
         e = max(u) * tan[a] + centre * nor[a]
-        out.append(PhysicalWall(int(walls.story[a]), (a, b), tuple(map(float, s)), tuple(map(float, e)), float(gap), True))
-    for a in np.flatnonzero(~used):
+        out.append(PhysicalWall(int(walls.story[a]), (a, b), (float(s[0]), float(s[1])), (float(e[0]), float(e[1])), float(gap), True))
+    for a in map(int, np.flatnonzero(~used)):
         centre = off[a] - default_thickness_m / 2
         s = walls.u_min[a] * tan[a] + centre * nor[a]
         e = walls.u_max[a] * tan[a] + centre * nor[a]
-        out.append(PhysicalWall(int(walls.story[a]), (int(a),), tuple(map(float, s)), tuple(map(float, e)), float(default_thickness_m), False))
+        out.append(
+            PhysicalWall(int(walls.story[a]), (int(a),), (float(s[0]), float(s[1])), (float(e[0]), float(e[1])), float(default_thickness_m), False)
+        )
     out.sort(key=lambda w: (w.story, w.faces))
     return tuple(out)
 
