@@ -258,7 +258,7 @@ def cases(record_property):
 
 
 @pytest.mark.hypothesis_cases(500)
-@settings(max_examples=500, suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
+@settings(max_examples=800, suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
 @given(doc=st.fixed_dictionaries({"annotations": st.lists(_items, max_size=5)}) | _json)
 def test_fuzz_parse_annotations_returns_or_raises_a_meshplan_error(cases, doc):
     """Any JSON value: annotations (finite, in metres) or a one-line MeshplanError, nothing else."""
