@@ -60,6 +60,20 @@ class PlanParams:
     footprint_closing_m
         The story's footprint (its floor and everything standing on it) is closed over gaps up
         to this size before its outline closes the rooms that walls leave open.
+    wall_gap_m
+        Where a wall was not scanned, a room is closed along the walls that were: a wall end
+        runs on by at most this much to the wall line it meets, and collinear pieces this far
+        apart are joined (the widest door: a partition that nearly reaches a wall closes across it).
+    collinear_wall_m
+        Two parallel wall pieces whose lines are this close across are one wall (plaster, scan
+        noise; less than a partition's thickness).
+    open_room_fit_m
+        A room that the scanned floor closes becomes its bounding rectangle along the walls
+        when the rectangle's outline lies within this distance of the floor's (the depth of
+        furniture along a wall, which hides the floor), else it follows the floor.
+    min_fragment_area_m2
+        A piece that no wall closes and that is smaller than a closet (about 1.5 m2) is no
+        room: it is merged into the room it touches, or dropped.
     min_room_area_m2, min_room_width_m
         Smaller or narrower faces of the wall arrangement are not rooms (wall interiors,
         slivers between wall lines and the floor outline).
@@ -77,6 +91,29 @@ class PlanParams:
         Width range and smallest height of a door (a gap from the floor up).
     window_sill_m, window_width_m, window_height_m
         Smallest sill height above the floor, width range and smallest height of a window.
+    opening_slab_m
+        Triangles this far in front of a wall face, or behind it by up to
+        ``opening_wall_depth_m`` plus this, belong to the wall when openings are looked for
+        (plaster, frame mouldings, scan noise; the other face of the wall and a piece of the
+        same wall set back a little count too).
+    opening_wall_depth_m
+        Thickest wall body looked through behind a face (a 20 cm partition plus plaster): its
+        far face closes what the near face's scan missed.
+    opening_facing_deg
+        Only triangles facing within this angle of the wall's normal (either way) are wall: a
+        door leaf standing open further than this, a jamb or a reveal is not.
+    opening_edge_straightness
+        Share of an opening's rows (columns) whose left and right (bottom and top) edges lie
+        within two grid cells of their median: a door or window frame is straight, a scan hole
+        is ragged.
+    door_corner_m
+        A gap that runs to the end of a wall is a door next to a corner when a perpendicular
+        wall crosses the wall's line within this distance of the gap's end (the corner is its
+        jamb; 30 cm: the wall thickness and a scan's rounded corner).
+    door_floor_beyond
+        A gap from the floor to the ceiling (the scan missed the lintel) is a door only when the
+        floor is seen beyond the wall across at least this share of its width (the floor runs
+        through a doorway; behind a missing strip of an outer wall there is nothing).
     """
 
     _parameter_constraints: ClassVar[dict[str, Constraint]] = {
@@ -87,6 +124,10 @@ class PlanParams:
         "floor_closure_margin_m": _GAP,
         "floor_cell_m": _CELL,
         "footprint_closing_m": Real(0.0, MAX_CLOSING_M, why="wider gaps are rooms, not scan holes"),
+        "wall_gap_m": _GAP,
+        "collinear_wall_m": _GAP,
+        "open_room_fit_m": _GAP,
+        "min_fragment_area_m2": Real(0.0, MAX_LENGTH_M**2, why="larger than any building"),
         "min_room_area_m2": Real(0.0, MAX_LENGTH_M**2, why="larger than any building"),
         "min_room_width_m": _LENGTH,
         "min_floor_fraction": _FRACTION,
@@ -98,6 +139,12 @@ class PlanParams:
         "window_sill_m": _GAP,
         "window_width_m": _SPAN,
         "window_height_m": _LENGTH,
+        "opening_slab_m": _GAP,
+        "opening_wall_depth_m": _GAP,
+        "opening_facing_deg": Real(0.0, 90.0, why="an angle between a triangle's normal and the wall's"),
+        "opening_edge_straightness": _FRACTION,
+        "door_corner_m": _GAP,
+        "door_floor_beyond": _FRACTION,
     }
 
     slices: int = 100
@@ -107,6 +154,10 @@ class PlanParams:
     floor_closure_margin_m: float = 0.05
     floor_cell_m: float = 0.05
     footprint_closing_m: float = 0.3
+    wall_gap_m: float = 1.5
+    collinear_wall_m: float = 0.1
+    open_room_fit_m: float = 0.3
+    min_fragment_area_m2: float = 1.5
     min_room_area_m2: float = 1.0
     min_room_width_m: float = 0.5
     min_floor_fraction: float = 0.3
@@ -118,6 +169,12 @@ class PlanParams:
     window_sill_m: float = 0.3
     window_width_m: tuple[float, float] = (0.3, 3.0)
     window_height_m: float = 0.3
+    opening_slab_m: float = 0.08
+    opening_wall_depth_m: float = 0.25
+    opening_facing_deg: float = 30.0
+    opening_edge_straightness: float = 0.75
+    door_corner_m: float = 0.3
+    door_floor_beyond: float = 0.5
 
     def to_dict(self) -> dict:
         return asdict(self)

@@ -33,9 +33,15 @@ from shapely.geometry import LineString, MultiLineString, Polygon
 from ..geometry import FloatArray, Mesh
 from ..orient import Orientation, Story, slab_faces
 from ..walls import FlatWalls
+from .closure import close_walls, straighten
 from .params import PlanParams
 
 FOOT_M = 0.3048
+
+#: Where the scanned floor closes a room, its outline loses notches and spikes narrower than
+#: twice this (m): the floor's fringe (where the sensor's reach ends, furniture legs, chair
+#: shadows) is ragged at that scale, a room's own corners and recesses are larger.
+FLOOR_FRINGE_M = 0.2
 
 
 
@@ -232,12 +238,17 @@ def story_rooms(mesh: Mesh, orientation: Orientation, walls: FlatWalls, story: S
     """``(polygon, closed_by)`` of every room of one story."""
     index = np.flatnonzero(walls.story == story.index)
     raster = floor_raster(mesh, orientation, story, slab_tolerance_m, params.floor_cell_m)
-    u_lo, u_hi = extend_walls(walls, index, params.corner_extension_m)
-    lines = [
-        LineString([u_lo[k] * walls.tangent[i] + walls.offset[i] * walls.normal[i], u_hi[k] * walls.tangent[i] + walls.offset[i] * walls.normal[i]])
-        for k, i in enumerate(index)
-    ]
+
+    def segments(lo: FloatArray, hi: FloatArray) -> list[LineString]:
+        t, n, o = walls.tangent[index], walls.normal[index], walls.offset[index]
+        return [LineString([lo[k] * t[k] + o[k] * n[k], hi[k] * t[k] + o[k] * n[k]]) for k in range(len(index))]
+
+    # the walls as scanned (corners only), and closed where the scan missed a piece of them
+    scanned = segments(*extend_walls(walls, index, params.corner_extension_m))
+    u_lo, u_hi, bridges = close_walls(walls, index, params.corner_extension_m, params.wall_gap_m, params.collinear_wall_m)
+    lines = segments(u_lo, u_hi) + bridges
     wall_lines = MultiLineString(lines) if lines else None
+    scanned_lines = MultiLineString(scanned) if scanned else None
     footprint = footprint_raster(mesh, orientation, story, raster, params.footprint_closing_m)
     outline = footprint.outline(params.floor_margin_m)
     boundary = list(lines)
@@ -251,18 +262,19 @@ def story_rooms(mesh: Mesh, orientation: Orientation, walls: FlatWalls, story: S
     # joined only around the free end of a wall by a strip narrower than a room come apart.
     slits = wall_lines.buffer(1e-4, cap_style="flat", join_style="mitre") if wall_lines is not None else None
     tight = None
-    out = []
+    closed: list[tuple[Polygon, str]] = []
+    open_parts: list[Polygon] = []
     for face in faces:
         if face.area < params.min_room_area_m2:
             continue
         if slits is not None:
             face = face.difference(slits)
         for part in _parts(face, params):
-            room = _classify(part, raster, wall_lines, params)
+            room = _classify(part, raster, wall_lines, scanned_lines, params)
             if room is None:
                 continue
-            if room[1] == "walls":
-                out.append(room)
+            if room[1] != "floor":
+                closed.append(room)
                 continue
             # where no wall closes it, the room ends where the story's footprint does (the
             # outline used for the arrangement lies a margin outside); what the footprint
@@ -270,10 +282,40 @@ def story_rooms(mesh: Mesh, orientation: Orientation, walls: FlatWalls, story: S
             if tight is None:
                 tight = footprint.outline(params.floor_closure_margin_m)
             for piece in _parts(part.intersection(tight), params):
-                room = _classify(piece, raster, None, params)
-                if room is not None:
-                    out.append((shapely.orient_polygons(Polygon(piece.exterior), exterior_cw=True), "floor"))
-    return out
+                if _classify(piece, raster, None, None, params) is not None:
+                    open_parts.append(Polygon(piece.exterior))
+    return _open_rooms(open_parts, closed, faces, params)
+
+
+def _open_rooms(parts: list[Polygon], closed: list[tuple[Polygon, str]], faces, params: PlanParams) -> list[tuple[Polygon, str]]:
+    """The rooms that the scanned floor closes: straightened (:func:`straighten`) where the
+    floor fills most of their rectangle, and without fragments (pieces smaller than
+    ``min_fragment_area_m2`` are merged into a room they touch, or dropped)."""
+    out: list[tuple[Polygon, str]] = []
+    rooms = [p for p, _ in closed]
+    small = [p for p in parts if p.area < params.min_fragment_area_m2]
+    big = [p for p in parts if p.area >= params.min_fragment_area_m2]
+    for piece in big:
+        # beyond the walls around the piece: every other face of the arrangement
+        others = [f for f in faces if f.area > 0 and not f.buffer(-1e-3).intersects(piece.representative_point())]
+        beyond = shapely.union_all([f.buffer(-1e-4, join_style="mitre") for f in others] + rooms) if others or rooms else None
+        shape = straighten(piece, beyond, params.open_room_fit_m, FLOOR_FRINGE_M)
+        rooms.append(shape)
+        out.append((shapely.orient_polygons(shape, exterior_cw=True), "floor"))
+    # a fragment joins the room it shares the most boundary with (a slit's width away)
+    result = list(closed) + out
+    for frag in small:
+        touch = [(k, frag.buffer(2e-3, join_style="mitre").intersection(p).area) for k, (p, _) in enumerate(result)]
+        touch = [(k, a) for k, a in touch if a > 0]
+        if not touch:
+            continue
+        k = max(touch, key=lambda t: t[1])[0]
+        poly, how = result[k]
+        merged = shapely.union_all([poly, frag.buffer(2e-4, join_style="mitre")]).buffer(-1e-4, join_style="mitre")
+        parts = [p for p in shapely.get_parts(merged) if isinstance(p, Polygon)]
+        if parts:
+            result[k] = (shapely.orient_polygons(Polygon(max(parts, key=lambda p: p.area).exterior), exterior_cw=True), how)
+    return result
 
 
 def _parts(shape, params: PlanParams) -> list[Polygon]:
@@ -294,11 +336,13 @@ def _opening(shape, radius: float):
         return shape.buffer(-radius, join_style="mitre").buffer(radius, join_style="mitre", mitre_limit=2.0).intersection(shape)
 
 
-def _classify(face: Polygon, raster: FloorRaster, wall_lines, params: PlanParams):
-    """``(polygon, closed_by)`` when the face is a room, else ``None``."""
+def _classify(face: Polygon, raster: FloorRaster, wall_lines, scanned_lines, params: PlanParams):
+    """``(polygon, closed_by)`` when the face is a room, else ``None``: ``closed_by`` is
+    ``"walls"`` when scanned walls bound it, ``"extension"`` when walls continued across what
+    the scan missed (:func:`close_walls`) do, else ``"floor"``."""
     xmin, zmin, xmax, zmax = face.bounds
-    gx, gz = np.meshgrid(np.arange(xmin, xmax, 0.1) + 0.05, np.arange(zmin, zmax, 0.1) + 0.05)
-    gx, gz = gx.ravel(), gz.ravel()
+    mx, mz = np.meshgrid(np.arange(xmin, xmax, 0.1) + 0.05, np.arange(zmin, zmax, 0.1) + 0.05)
+    gx, gz = mx.ravel(), mz.ravel()
     inside = shapely.contains_xy(face, gx, gz)
     if inside.sum() == 0 or raster.lookup(gx[inside], gz[inside]).mean() < params.min_floor_fraction:
         return None
@@ -306,8 +350,10 @@ def _classify(face: Polygon, raster: FloorRaster, wall_lines, params: PlanParams
     if wall_lines is not None:
         ring = face.exterior
         d = np.linspace(0, ring.length, max(8, int(ring.length / 0.1)), endpoint=False)
-        dist = shapely.distance(shapely.line_interpolate_point(ring, d), wall_lines)
-        if np.mean(dist > 0.02) <= 0.05:
-            closed_by = "walls"
+        pts = shapely.line_interpolate_point(ring, d)
+        if np.mean(shapely.distance(pts, wall_lines) > 0.02) <= 0.05:
+            closed_by = "extension"
+            if scanned_lines is not None and np.mean(shapely.distance(pts, scanned_lines) > 0.02) <= 0.05:
+                closed_by = "walls"
     poly = shapely.orient_polygons(Polygon(shapely.simplify(face, 0.005).exterior), exterior_cw=True)
     return poly, closed_by
