@@ -10,7 +10,7 @@ scanned: no bottoms, no backs against a wall.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -44,6 +44,8 @@ class Item:
     footprint: FloatArray  # (4, 2) [x, z]
     height_m: float  # top above the floor
     tilted: bool
+    bottom_m: float = 0.0  # lowest point above the floor (wall cabinets)
+    built_in: bool = False  # a fixture flush against a wall (kitchen, wardrobe, desk)
 
 
 def _legs(w: float, d: float, h: float, t: float, inset: float, z0: float = 0.0) -> list[_LBox]:
@@ -195,20 +197,9 @@ def _rect(rect: tuple[float, float, float, float], pad: float) -> Polygon:
     return shapely.box(x0 - pad, z0 - pad, x1 + pad, z1 + pad)
 
 
-def place_furniture(b: Building, markers: list[Marker], rng: np.random.Generator) -> list[Item]:
-    """Furnish every room (2-6 items, fewer in halls, corridors, stairwells and baths), with one
-    board leaning against a wall somewhere in the building.
-
-    Parameters
-    ----------
-    b
-        The building.
-    markers
-        Annotated objects: tall items keep clear of the wall-mounted ones.
-    rng
-        The furniture's random generator.
-    """
-    # keep-out zones per room: always (doors, stairs) and for tall items (windows, sensors)
+def keep_out_zones(b: Building, markers: list[Marker]) -> tuple[dict[int, list[Polygon]], dict[int, list[Polygon]]]:
+    """Keep-out zones per room: ``always`` (in front of doors, around stairs and slab openings)
+    and, for items taller than a table, ``tall`` (in front of windows and wall-mounted sensors)."""
     always: dict[int, list[Polygon]] = {r: [] for r in range(len(b.rooms))}
     tall: dict[int, list[Polygon]] = {r: [] for r in range(len(b.rooms))}
     for o in b.openings:
@@ -224,6 +215,26 @@ def place_furniture(b: Building, markers: list[Marker], rng: np.random.Generator
         always[st.room].append(_rect(st.opening, 0.3))
     for above, rect in b.floor_openings:
         always[above].append(_rect(rect, 0.3))
+    return always, tall
+
+
+def place_furniture(b: Building, markers: list[Marker], rng: np.random.Generator, fixed: Sequence[Item] = ()) -> list[Item]:
+    """Furnish every room (2-6 items, fewer in halls, corridors, stairwells and baths), with one
+    board leaning against a wall somewhere in the building.
+
+    Parameters
+    ----------
+    b
+        The building.
+    markers
+        Annotated objects: tall items keep clear of the wall-mounted ones.
+    rng
+        The furniture's random generator.
+    fixed
+        Items already in place (built-ins): the others keep clear of them; they come first in the
+        result.
+    """
+    always, tall = keep_out_zones(b, markers)
     inside = {r: Polygon(room.polygon).buffer(-0.01, join_style="mitre") for r, room in enumerate(b.rooms)}
     placed: dict[int, list[Polygon]] = {r: [] for r in range(len(b.rooms))}
     room_walls = {}
@@ -232,6 +243,10 @@ def place_furniture(b: Building, markers: list[Marker], rng: np.random.Generator
         room_walls[r] = (ids, np.array([b.walls[i].length for i in ids]))
     counts: dict[tuple[int, str], int] = {}
     items: list[Item] = []
+    for it in fixed:
+        items.append(it)
+        placed[it.room].append(Polygon(it.footprint))
+        counts[(it.room, it.kind)] = counts.get((it.room, it.kind), 0) + 1
 
     def fits(r: int, fp: FloatArray, height: float) -> bool:
         poly = Polygon(fp)

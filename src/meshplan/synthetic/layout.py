@@ -14,10 +14,11 @@ from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
+from shapely.geometry import Polygon
 
 from ..geometry import FloatArray
 from .polygons import ccw, edge_normals, point_in_polygon, rect_polygon, signed_area
-from .presets import RISE_M, STAIR_APPROACH_M, STAIR_WALL_GAP_M, plan_apartment, plan_office, plan_room, uniform
+from .presets import RISE_M, STAIR_APPROACH_M, STAIR_WALL_GAP_M, plan_apartment, plan_hard, plan_office, plan_room, uniform
 from .tessellate import Box
 
 #: Clear wall kept between a door and a corner, the end of a shared wall or another opening.
@@ -271,20 +272,25 @@ def _stair(
     return Stair(story, room, (float(lo[0]), float(hi[0]), float(lo[1]), float(hi[1])), tuple(boxes), n, rise, going, flight)
 
 
-def make_building(preset: str, n_stories: int, rng: np.random.Generator) -> Building:
+def make_building(preset: str, n_stories: int, rng: np.random.Generator, angled: bool = False) -> Building:
     """Draw the building of ``preset`` (truth frame) from ``rng``.
 
     Parameters
     ----------
     preset
-        One of ``room``, ``apartment``, ``office``, ``multistory``.
+        One of ``room``, ``apartment``, ``office``, ``multistory``, ``hard`` (``hard-parametric``
+        is the same building).
     n_stories
         Number of stories (1 except for ``multistory``).
     rng
         The layout's random generator.
+    angled
+        Walls off the axes: a slanted wall and a 45-degree chamfer (``room`` and ``hard`` only).
     """
     if preset == "room":
-        plans, ceil_h, slabs, width, depth, (going, flight) = plan_room(rng)
+        plans, ceil_h, slabs, width, depth, (going, flight) = plan_room(rng, angled)
+    elif preset in ("hard", "hard-parametric"):
+        plans, ceil_h, slabs, width, depth, (going, flight) = plan_hard(rng, angled)
     elif preset == "office":
         plans, ceil_h, slabs, width, depth, (going, flight) = plan_office(rng)
     else:
@@ -416,7 +422,11 @@ def make_building(preset: str, n_stories: int, rng: np.random.Generator) -> Buil
         if above:
             floor_openings.append((above[0], st.opening))
 
-    fp = mapped(rect_polygon(-ext, width + ext, -ext, depth + ext))
+    if plans[0].envelope is not None:  # the outline of the exterior walls, grown by their thickness
+        grown = Polygon(mapped(plans[0].envelope)).buffer(ext, join_style="mitre")
+        fp = ccw(np.round(np.asarray(grown.exterior.coords)[:-1], 6))
+    else:
+        fp = mapped(rect_polygon(-ext, width + ext, -ext, depth + ext))
     return Building(
         preset=preset,
         stories=stories,

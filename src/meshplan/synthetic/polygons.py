@@ -59,3 +59,48 @@ def point_in_polygon(poly: FloatArray, x: float, z: float) -> bool:
         if (az > z) != (bz > z) and x < ax + (z - az) * (bx - ax) / (bz - az):
             inside = not inside
     return inside
+
+
+def is_rectilinear(poly: FloatArray, tol: float = 1e-9) -> bool:
+    """Every edge of ``poly`` runs along x or along z."""
+    d = np.roll(poly, -1, axis=0) - poly
+    return bool(np.all(np.min(np.abs(d), axis=1) <= tol))
+
+
+def trapezoids(poly: FloatArray, along_x: bool) -> list[tuple[float, float, float, float, float, float]]:
+    """A simple polygon cut into trapezoids by lines through its vertices.
+
+    With ``along_x`` the cuts are lines of constant z and every trapezoid is
+    ``(v0, v1, a0, b0, a1, b1)``: it spans ``v0 <= z <= v1`` and ``a(z) <= x <= b(z)``, with
+    ``(a0, b0)`` at ``v0`` and ``(a1, b1)`` at ``v1`` (x and z swapped otherwise). Either width
+    may be 0 (a triangle).
+    """
+    p = np.asarray(poly, dtype=np.float64)
+    if not along_x:
+        p = p[:, ::-1]
+    q = np.roll(p, -1, axis=0)
+    levels = np.unique(np.round(p[:, 1], 12))
+    out = []
+    for v0, v1 in zip(levels[:-1], levels[1:]):
+        mid = 0.5 * (v0 + v1)
+        hits = []
+        for (ax, az), (bx, bz) in zip(p, q):
+            if (az > mid) == (bz > mid):
+                continue
+
+            def at(v: float, ax: float = ax, az: float = az, bx: float = bx, bz: float = bz) -> float:
+                return float(ax + (v - az) * (bx - ax) / (bz - az))
+
+            hits.append((at(mid), at(v0), at(v1)))
+        hits.sort()
+        for (_, l0, l1), (_, r0, r1) in zip(hits[0::2], hits[1::2]):
+            out.append((float(v0), float(v1), l0, r0, l1, r1))
+    return out
+
+
+def max_skew(pieces: list[tuple[float, float, float, float, float, float]]) -> float:
+    """Largest sideways run per unit of height of the slanted sides of ``trapezoids``."""
+    s = 0.0
+    for v0, v1, a0, b0, a1, b1 in pieces:
+        s = max(s, abs(a1 - a0) / (v1 - v0), abs(b1 - b0) / (v1 - v0))
+    return s

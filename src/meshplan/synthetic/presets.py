@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..geometry import FloatArray
-from .polygons import rect_polygon, union_polygon
+from .polygons import ccw, rect_polygon, union_polygon
 
 #: Smallest width or depth of a generated room (corridors excepted), metres.
 MIN_ROOM_M = 2.2
@@ -34,6 +34,7 @@ class Plan:
     entrance: str | None = None
     windows: dict[str, tuple[int, int]] = field(default_factory=dict)
     stairwell: str | None = None  # room holding a stair up to the next story
+    envelope: FloatArray | None = None  # inner outline of the exterior walls, when not the rectangle
 
 
 # --------------------------------------------------------------------------------------------
@@ -84,10 +85,98 @@ def _max_cells(length: float, gap: float) -> int:
 PlanOut = tuple[list[Plan], list[float], list[float], float, float, tuple[float, float]]
 
 
-def plan_room(rng: np.random.Generator) -> PlanOut:
+def plan_room(rng: np.random.Generator, angled: bool = False) -> PlanOut:
     w, d = uniform(rng, 3.5, 6.0), uniform(rng, 3.0, 5.0)
     plan = Plan(rooms=[("room", "room", rect_polygon(0, w, 0, d))], entrance="room", windows={"room": (1, 2)})
-    return [plan], [uniform(rng, 2.4, 3.0)], [], w, d, (0.28, 0.9)
+    ceiling = uniform(rng, 2.4, 3.0)
+    if angled:  # drawn after everything else, so that the rest of the room is the same
+        poly = angled_rect(0.0, w, 0.0, d, rng, slant=True, chamfer=True)
+        plan.rooms = [("room", "room", poly)]
+        plan.envelope = poly
+    return [plan], [ceiling], [], w, d, (0.28, 0.9)
+
+
+# --------------------------------------------------------------------------------------------
+# Walls off the axes
+
+#: Angle of a slanted wall from the walls along x, degrees (real rooms: bay fronts, plots cut at
+#: an angle); it is 90 degrees minus this from the walls along z.
+SLANT_DEG = (20.0, 40.0)
+#: How far a slanted wall cuts into its room along the wall it starts from, metres.
+SLANT_DROP_M = (0.8, 1.6)
+#: Length of the 45-degree chamfer across a corner, measured along each of the two walls, metres.
+CHAMFER_M = (0.8, 1.4)
+
+
+def angled_rect(
+    x0: float, x1: float, z0: float, z1: float, rng: np.random.Generator, slant: bool = True, chamfer: bool = True
+) -> FloatArray:
+    """The rectangle ``[x0, x1] x [z0, z1]`` with a slanted wall across its ``(x0, z1)`` corner
+    (:data:`SLANT_DEG` off the x walls) and a 45-degree chamfer across its ``(x1, z0)`` corner.
+
+    Both corners must be on the outside of the building (nothing is behind them).
+    """
+    w, d = x1 - x0, z1 - z0
+    pts: list[tuple[float, float]] = [(x0, z0)]
+    if chamfer:
+        c = uniform(rng, CHAMFER_M[0], min(CHAMFER_M[1], 0.3 * min(w, d)))
+        pts += [(x1 - c, z0), (x1, z0 + c)]
+    else:
+        pts.append((x1, z0))
+    pts.append((x1, z1))
+    if slant:
+        alpha = np.radians(uniform(rng, *SLANT_DEG))
+        drop = uniform(rng, SLANT_DROP_M[0], min(SLANT_DROP_M[1], 0.4 * d))
+        run = min(drop / np.tan(alpha), 0.5 * w)
+        drop = run * np.tan(alpha)
+        pts += [(x0 + run, z1), (x0, z1 - drop)]
+    else:
+        pts.append((x0, z1))
+    return ccw(np.array(pts, dtype=np.float64))
+
+
+def plan_hard(rng: np.random.Generator, angled: bool = True) -> PlanOut:
+    """A flat: an (optionally slanted) living room, a kitchen big enough for an island, two
+    bedrooms (one chamfered), a bath and a hall joining them."""
+    g = uniform(rng, 0.10, 0.15)
+    ceiling = uniform(rng, 2.5, 2.9)
+    living, kitchen, bed1 = uniform(rng, 3.8, 4.6), uniform(rng, 3.9, 4.5), uniform(rng, 3.2, 4.0)
+    top, hall, bottom = uniform(rng, 3.9, 4.4), uniform(rng, 1.5, 1.8), uniform(rng, 3.2, 4.0)
+    bath = uniform(rng, 2.2, 2.8)
+    xs = living + g
+    width = xs + kitchen + g + bed1
+    zh0, zh1 = top + g, top + g + hall
+    zb = zh1 + g
+    depth = zb + bottom
+    living_poly = angled_rect(0.0, living, 0.0, depth, rng, slant=True, chamfer=False) if angled else rect_polygon(0, living, 0, depth)
+    bed1_poly = (
+        angled_rect(xs + kitchen + g, width, 0.0, top, rng, slant=False, chamfer=True)
+        if angled else rect_polygon(xs + kitchen + g, width, 0.0, top)
+    )
+    plan = Plan()
+    plan.rooms = [
+        ("living", "living", living_poly),
+        ("kitchen", "kitchen", rect_polygon(xs, xs + kitchen, 0.0, top)),
+        ("bedroom1", "bedroom", bed1_poly),
+        ("hall", "hall", rect_polygon(xs, width, zh0, zh1)),
+        ("bath", "bath", rect_polygon(xs, xs + bath, zb, depth)),
+        ("bedroom2", "bedroom", rect_polygon(xs + bath + g, width, zb, depth)),
+    ]
+    plan.doors = [("hall", r) for r in ("living", "kitchen", "bedroom1", "bath", "bedroom2")] + [("living", "kitchen")]
+    plan.entrance = "hall"
+    plan.windows = {"living": (2, 3), "kitchen": (1, 2), "bedroom1": (1, 2), "bedroom2": (1, 2), "bath": (0, 1)}
+    # the inner outline of the exterior walls: the flat is convex (its cut corners are convex)
+    plan.envelope = _outline(np.concatenate([poly for _, _, poly in plan.rooms]))
+    return [plan], [ceiling], [], width, depth, (0.28, 0.9)
+
+
+def _outline(points: FloatArray) -> FloatArray:
+    """The convex hull of ``points``, counter-clockwise seen from above."""
+    import shapely
+
+    hull = shapely.MultiPoint([tuple(p) for p in points]).convex_hull
+    pts = np.asarray(hull.exterior.coords)[:-1]
+    return ccw(pts)
 
 
 def plan_office(rng: np.random.Generator) -> PlanOut:

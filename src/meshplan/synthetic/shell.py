@@ -14,7 +14,7 @@ import numpy as np
 from ..geometry import FloatArray
 from .defects import Hole, Missing
 from .layout import Building, Opening, Wall
-from .polygons import inset_polygon
+from .polygons import inset_polygon, is_rectilinear, max_skew, trapezoids
 from .tessellate import Piece
 
 _UP = np.array([0.0, 1.0, 0.0])
@@ -71,6 +71,9 @@ def shell_pieces(b: Building, bevel_m: float, missing: list[Missing], holes: lis
             ("floor", floor, _UP, floor_cuts.get(r, [])),
             ("ceiling", ceiling, -_UP, ceiling_cuts.get(r, [])),
         ):
+            if not is_rectilinear(poly):
+                pieces += _slanted_pieces(poly, kind, y, normal, r, cuts, holes_by.get((kind, r), []))
+                continue
             pieces.append(
                 Piece(
                     origin=np.array([0.0, y, 0.0]),
@@ -102,6 +105,37 @@ def shell_pieces(b: Building, bevel_m: float, missing: list[Missing], holes: lis
             if st.room == r:
                 pieces += _slab_edges(st.opening, ceiling, b.stories[room.story + 1][0], r)
     return pieces
+
+
+def _slanted_pieces(
+    poly: FloatArray, kind: str, y: float, normal: FloatArray, group: int, cuts: list, ellipses: list
+) -> list[Piece]:
+    """A floor or ceiling whose outline has walls off the axes, as trapezoids between lines through
+    its corners (exact edges along every wall). The lines run across the direction in which the
+    slanted sides lean least, so that the cells stay nearly square."""
+    if cuts:
+        raise ValueError("stair openings in rooms with slanted walls are not supported")
+    along_x = max_skew(trapezoids(poly, True)) <= max_skew(trapezoids(poly, False))
+    eu, ev = (_X, _Z) if along_x else (_Z, _X)
+    if along_x:
+        holes = list(ellipses)
+    else:  # (u, v) = (z, x): a mirror, which turns an ellipse's angle a into pi/2 - a
+        holes = [(cz, cx, a, b, np.pi / 2 - ang) for cx, cz, a, b, ang in ellipses]
+    return [
+        Piece(
+            origin=np.array([0.0, y, 0.0]),
+            eu=eu,
+            ev=ev,
+            normal=normal,
+            u_range=(a0, b0),
+            u_range_top=(a1, b1),
+            v_range=(v0, v1),
+            kind=kind,
+            group=group,
+            ellipses=list(holes),
+        )
+        for v0, v1, a0, b0, a1, b1 in trapezoids(poly, along_x)
+    ]
 
 
 def _wall_pieces(

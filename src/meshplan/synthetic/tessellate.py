@@ -20,10 +20,14 @@ import numpy as np
 from ..geometry import FloatArray, IntArray
 
 #: Surface kind of every face of a synthetic scan (``SyntheticScan.face_kinds`` indexes this).
-SURFACE_KINDS = ("floor", "ceiling", "wall", "bevel", "opening", "slab_edge", "stair", "furniture")
+SURFACE_KINDS = ("floor", "ceiling", "wall", "bevel", "opening", "slab_edge", "stair", "furniture", "door_leaf")
 
 #: Largest in-plane jitter of an interior vertex, as a fraction of the local grid spacing.
 JITTER_FRACTION = 0.3
+
+#: Growth of the cell size from one row or column to the next on a graded (decimated) grid: the
+#: cells double within two steps, about what quadric decimation leaves beside a crease.
+GRADING_GROWTH = 1.6
 
 _UNIT = np.array([0.0, 1.0])
 
@@ -57,7 +61,12 @@ class Piece:
     triangle
         ``(3, 3)`` corners of a single triangle emitted instead of a grid.
     cell_m
-        Grid cell size.
+        Grid cell size (on a graded grid, beside the piece's edges and hard cuts).
+    max_cell_m
+        When set, the grid is graded like a decimated mesh: cells of ``cell_m`` along the edges
+        and hard cuts, growing by :data:`GRADING_GROWTH` per row up to ``max_cell_m`` in between.
+    jitter
+        Largest in-plane jitter of interior vertices, as a fraction of the local grid spacing.
     flip
         Reverse the winding of every face (outward or mixed scans).
     """
@@ -78,6 +87,8 @@ class Piece:
     ellipses: list = field(default_factory=list)
     triangle: FloatArray | None = None
     cell_m: float = 0.05
+    max_cell_m: float | None = None
+    jitter: float = JITTER_FRACTION
     flip: bool = False
 
     @property
@@ -217,6 +228,31 @@ def _nodes(length: float, breaks: FloatArray, cell_m: float) -> tuple[FloatArray
     return nodes, fixed
 
 
+def _graded_nodes(length: float, breaks: FloatArray, cell_m: float, max_cell_m: float) -> tuple[FloatArray, np.ndarray]:
+    """Like :func:`_nodes`, but every interval between breaks starts and ends with cells of about
+    ``cell_m`` that grow by :data:`GRADING_GROWTH` towards its middle, up to ``max_cell_m``."""
+    nodes, fixed = [0.0], [True]
+    for f0, f1 in zip(breaks[:-1], breaks[1:]):
+        seg = (f1 - f0) * length
+        steps: list[float] = []
+        total = 0.0
+        while 2.0 * total < seg - 1e-12:
+            steps.append(min(cell_m * GRADING_GROWTH ** len(steps), max_cell_m))
+            total += steps[-1]
+        if seg <= cell_m + 1e-12 or not steps:
+            seq = np.array([1.0])
+        else:
+            seq = np.array(steps + steps[::-1])
+            if len(seq) > 2 and seq[len(steps) - 1] + seq[len(steps)] <= max_cell_m:
+                seq = np.r_[seq[: len(steps) - 1], seq[len(steps) - 1] + seq[len(steps)], seq[len(steps) + 1 :]]
+            seq = seq / seq.sum()
+        pos = f0 + (f1 - f0) * np.cumsum(seq)
+        pos[-1] = f1
+        nodes += list(pos)
+        fixed += [False] * (len(pos) - 1) + [True]
+    return np.array(nodes), np.array(fixed, dtype=bool)
+
+
 def face_count_model(pieces: list[Piece], cells_m: FloatArray):
     """A fast predictor of the number of faces: ``model(scale)`` is the expected face count when
     every piece's cell is ``cells_m * scale`` (cuts counted by their area)."""
@@ -286,6 +322,11 @@ def _node_arrays(p: Piece) -> tuple[FloatArray, np.ndarray, FloatArray, np.ndarr
     """Grid nodes (fractions) and break flags of a piece along u and v."""
     wb, wt = p.widths()
     width, height = max(wb, wt), p.v_range[1] - p.v_range[0]
+    if p.max_cell_m is not None:  # graded, like a decimated mesh
+        bu, bv = p.breaks()
+        su, fu = _graded_nodes(width, bu, p.cell_m, p.max_cell_m)
+        tv, fv = _graded_nodes(height, bv, p.cell_m, p.max_cell_m)
+        return su, fu, tv, fv
     if not p.cuts and p.keep is None:  # the common case, without the general machinery
         out = []
         for length in (width, height):
@@ -355,6 +396,9 @@ def tessellate(pieces: list[Piece], rng: np.random.Generator) -> tuple[FloatArra
     s0, t0 = U[iu], V[iv]
     n_all = len(vp)
     rad = JITTER_FRACTION * np.sqrt(rng.random(n_all))
+    jitter = np.array([p.jitter for p in pieces if p.triangle is None], dtype=np.float64)
+    if np.any(jitter != JITTER_FRACTION):
+        rad = rad * (jitter / JITTER_FRACTION)[vp]
     ang = 2.0 * np.pi * rng.random(n_all)
     ju = rad * np.cos(ang) * SPU[iu]
     jv = rad * np.sin(ang) * SPV[iv]

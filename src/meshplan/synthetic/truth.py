@@ -129,3 +129,44 @@ def build_truth(
     out = cast(dict[str, Any], _r(truth))  # _r maps a dict to a dict
     out["transform"] = transform.tolist()  # full precision: mapping the scan back must be exact
     return out
+
+
+def add_options_truth(truth: dict, params, b: Building, items: list[Item], leaves: list, wall_tops: FloatArray | None) -> None:
+    """Add to ``truth`` what the options beyond the original generator change (in place).
+
+    * ``stories[i]["ceiling_scanned"]``: False when the ceiling is not in the scan (its height is
+      still the true one: where the walls end in a parametric model);
+    * ``walls[i]["scanned_top"]``: the height up to which the wall face is scanned;
+    * ``openings[i]["clear_width"]`` and ``["leaf"]`` for doors with a leaf: the clear width
+      (the opening less the leaf standing in it when open at 90 degrees) and the leaf's hinge
+      (``[x, z]``), opening angle (degrees, 0 closed), swing (``inside``: into the room of the
+      door's primary wall face, the one with the lower index of the two faces), room (or None
+      outside the building), width and thickness;
+    * ``furniture[i]["built_in"]`` and ``["bottom"]`` for fixtures (kitchen units, wall
+      cabinets, islands, wardrobes, desks). Truth walls are only the real walls: fixtures are
+      never among them, whatever their height.
+    """
+    if params.drop_ceiling or params.parametric:
+        for st in truth["stories"]:
+            st["ceiling_scanned"] = False
+    if wall_tops is not None:
+        for wt, w in zip(truth["walls"], b.walls):
+            wt["scanned_top"] = _r(min(float(wall_tops[w.room]), w.top))
+    by_label = {lf.label: lf for lf in leaves}
+    for o in truth["openings"]:
+        lf = by_label.get(o["label"])
+        if lf is None or o["kind"] != "door":
+            continue
+        o["clear_width"] = _r(lf.width_m - lf.thickness_m)
+        o["leaf"] = _r(
+            {
+                "hinge": lf.hinge, "angle_deg": lf.angle_deg, "swing": lf.swing,
+                "room": b.rooms[lf.room].label if lf.room >= 0 else None, "width": lf.width_m, "thickness": lf.thickness_m,
+            }
+        )
+    for f, it in zip(truth["furniture"], items):
+        if it.built_in:
+            f["built_in"] = True
+            f["bottom"] = _r(it.bottom_m)
+    if params.parametric:
+        truth["parametric"] = {"openings": params.parametric_openings, "wall_thickness": _r(params.parametric_wall_m)}
