@@ -26,7 +26,27 @@ from the floor and ceiling structure:
    tell: they may face either way.
 
 :func:`refine_with_slabs` then fits the floors' common normal to face positions (see
-``OrientParams.gravity_plane_fit``).
+``OrientParams.gravity_plane_fit``) and combines it with Method 2's up by inverse variance: the
+fit's from a block jackknife over the floor (:func:`floor_fit_uncertainty_deg`), the normals' a
+fixed :data:`_NORMALS_ERROR_DEG`. A flat floor's fit wins (synthetic scans, HoloLens 2); a warped
+floor's (the Tango rooms, domed by 3-4 cm) counts for less, as it is less sure.
+
+Decided against, measured on the 16 real scans (2026-12):
+
+* *A prior from the file format.* glTF defines +y as up and USD states its ``upAxis``; OBJ, PLY,
+  STL and OFF define nothing. As a tie-breaker (never against clear evidence) it would be
+  legitimate for those two formats only, and the rotation-invariance promise would then hold for
+  the others (the property tests turn scans in memory and write OBJ/PLY only). It is not used:
+  the format does not reach this module (a :class:`~meshplan.geometry.Mesh` is vertices and
+  faces; the reader, the pipeline and :func:`meshplan.orient.orient` would have to pass it), and
+  the one scan it would fix (the tatami room, wall pair 28.6 against floor and ceiling 24.5)
+  needs a factor that only a convention, not the geometry, can justify.
+* *Objects ending on the floor* (the lower ends of vertical surfaces at one common level): the
+  share of plan cells whose vertical surfaces end at the lowest main level does not separate the
+  true axis from a wall's on the tatami room (0.39 against 0.47): furniture stands against walls
+  as well as on floors, and floor, ceiling and side walls all end at a wall.
+* *The desk fragment* (4.6 m2 of wall, 0.4 m2 of floor): the wall axis outscores the floor's four
+  times on every cue; given the axis, up is 0.7 degrees off. Not reachable from its geometry.
 """
 
 from __future__ import annotations
@@ -86,6 +106,16 @@ _ENCLOSURE_SAMPLE_M = 0.1
 
 #: Most points sampled on one triangle (bounds the memory for absurdly large triangles).
 _ENCLOSURE_MAX_SAMPLES = 10_000
+
+#: Plan block (m) of the jackknife that measures how well the floors define their normal: larger
+#: than a scanner's surface patches and the correlation length of its noise (10-50 cm), so that
+#: blocks are nearly independent; small enough that one room gives a dozen blocks.
+_JACKKNIFE_BLOCK_M = 1.0
+
+#: Accuracy (degrees, one standard deviation) of Method 2's up from the normals: its median
+#: error on the synthetic rooms (0.4 degrees; see ``OrientParams.gravity_plane_fit``). The
+#: weight of the normals when the floor fit is combined with them.
+_NORMALS_ERROR_DEG = 0.4
 
 
 @dataclass(frozen=True)
@@ -389,6 +419,14 @@ def refine_with_slabs(
     deviations of the residual heights. The refinement is rejected (``up`` returned unchanged)
     when the slabs are too small to define a plane or it would move up by more than 2 degrees.
 
+    The fit is only as good as the floor is flat. A scanned floor can be warped by a few
+    centimetres (pose drift, a sagging or sloping floor: the Tango rooms are domed by 3-4 cm
+    over 3 m), and a warp of that size tilts the best plane by about warp / extent whatever the
+    number of faces. So the fitted normal is combined with ``up`` (Method 2's estimate from the
+    normals) by inverse variance (:func:`_blend_by_uncertainty`), the fit's variance measured by a
+    block jackknife (:func:`floor_fit_uncertainty_deg`): on a flat floor the fit wins; on a
+    warped one up stays near the normals.
+
     Returns the refined up direction and the number of faces used.
     """
     g = unit(up)
@@ -420,8 +458,60 @@ def refine_with_slabs(
         if new @ up < np.cos(np.radians(2.0)):
             break
         g, used = unit(new), int(len(idx))
+        fit_p, fit_a, fit_k = centroids[idx], a, k
         resid = x @ g
         sd = float(np.sqrt(np.average(resid**2, weights=a)))
         slabs = np.asarray([float(means[j] @ g) if wsum[j] > 0 else slabs[j] for j in range(len(slabs))])
         window = max(3.0 * sd, 0.02)
+    if used:
+        g = _blend_by_uncertainty(unit(up), g, fit_p, fit_a, fit_k)
     return g, used
+
+
+def floor_fit_uncertainty_deg(points: FloatArray, areas: FloatArray, slab: np.ndarray, normal: FloatArray) -> float:
+    """Standard error (degrees) of the floors' common normal fitted to ``points``, by a block
+    jackknife.
+
+    The floors are cut into plan blocks of :data:`_JACKKNIFE_BLOCK_M`; the normal is fitted again
+    without each block in turn (every slab centred on its own mean, as in the fit), and the
+    spread of those normals is the jackknife's standard error. A warp of the floor (pose drift,
+    a dome, a sag) moves the fit as blocks come and go, where the random noise of the triangles
+    averages out, so this measures what the face count alone would hide. Infinite with fewer
+    than three blocks.
+    """
+    g = unit(normal)
+    e1 = unit(np.cross(g, [1.0, 0.0, 0.0] if abs(g[0]) < 0.9 else [0.0, 1.0, 0.0]))
+    plan = np.floor(points @ np.c_[e1, np.cross(g, e1)] / _JACKKNIFE_BLOCK_M).astype(np.int64)
+    block = np.unique(plan, axis=0, return_inverse=True)[1].ravel()
+    nb = int(block.max()) + 1 if len(block) else 0
+    if nb < 3:
+        return float("inf")
+    ns = int(slab.max()) + 1
+    cell = block * ns + slab
+    m = nb * ns
+    # area, first and second moments per (block, slab); points taken about their mean for precision
+    x = points - np.average(points, axis=0, weights=areas)
+    w = np.bincount(cell, weights=areas, minlength=m).reshape(nb, ns)
+    s1 = np.stack([np.bincount(cell, weights=areas * x[:, i], minlength=m) for i in range(3)], -1).reshape(nb, ns, 3)
+    s2 = np.stack(
+        [np.bincount(cell, weights=areas * x[:, i] * x[:, j], minlength=m) for i in range(3) for j in range(3)], -1
+    ).reshape(nb, ns, 3, 3)
+    w_all, s1_all, s2_all = w.sum(0), s1.sum(0), s2.sum(0)
+    lw, l1, l2 = w_all - w, s1_all - s1, s2_all - s2  # every block left out in turn
+    with np.errstate(invalid="ignore", divide="ignore"):
+        centred = np.where(lw[..., None, None] > 0, l1[..., :, None] * l1[..., None, :] / lw[..., None, None], 0.0)
+    scatter = (l2 - centred).sum(1)
+    normals = np.linalg.eigh(scatter)[1][:, :, 0]
+    normals *= np.sign(normals @ g)[:, None]
+    mean = unit(normals.mean(0))
+    dev = np.arccos(np.clip(normals @ mean, -1.0, 1.0))
+    return float(np.degrees(np.sqrt((nb - 1) / nb * np.sum(dev**2))))
+
+
+def _blend_by_uncertainty(normals_up: FloatArray, fitted: FloatArray, points: FloatArray, areas: FloatArray, slab: np.ndarray) -> FloatArray:
+    """The fitted floor normal and Method 2's up, weighted by the inverse of their variances:
+    :func:`floor_fit_uncertainty_deg` for the fit, :data:`_NORMALS_ERROR_DEG` for the normals."""
+    sigma_fit = floor_fit_uncertainty_deg(points, areas, slab, fitted)
+    f = _NORMALS_ERROR_DEG**2 / (_NORMALS_ERROR_DEG**2 + sigma_fit**2)
+    n = normals_up * np.sign(normals_up @ fitted)
+    return unit(n + f * (fitted - n))
