@@ -173,14 +173,21 @@ def room_scores(plan_rooms: list[dict], truth: dict, p: np.ndarray) -> dict[str,
 
 
 def opening_scores(plan_openings: list[dict], plan_walls: list[dict], truth: dict, p: np.ndarray, kind: str) -> dict[str, Any]:
-    """Precision, recall and width errors of one kind of opening."""
-    true = []
-    for o in truth.get("openings", []):
+    """Precision, recall and width errors of one kind of opening, per physical opening.
+
+    The synthetic truth lists an interior opening once per wall face it passes through, under
+    one label; those faces are one opening, which a found opening matches through any of them
+    (meshplan reports each physical opening once). Openings without a label are their own.
+    """
+    groups: dict[tuple, list[dict]] = {}
+    for i, o in enumerate(truth.get("openings", [])):
         if o["kind"] != kind:
             continue
         w = truth["walls"][o["wall"]]
         c = _map_xz(p, [o["center"]], 0.5 * (o["bottom"] + o["top"]))[0]
-        true.append({"story": o["story"], "center": c, "normal": _map_dir(p, w["normal"])[0], "width": o["width"]})
+        key = (o["story"], o["label"]) if o.get("label") else (o["story"], f"#{i}")
+        groups.setdefault(key, []).append({"story": o["story"], "center": c, "normal": _map_dir(p, w["normal"])[0], "width": o["width"]})
+    true = list(groups.values())
     found = [o for o in plan_openings if o["kind"] == kind]
     used = np.zeros(len(true), bool)
     width_err = []
@@ -188,16 +195,19 @@ def opening_scores(plan_openings: list[dict], plan_walls: list[dict], truth: dic
     for o in found:
         n = np.asarray(plan_walls[o["wall"]]["normal"], float) if 0 <= o["wall"] < len(plan_walls) else np.zeros(2)
         best, best_d = None, OPENING_DISTANCE_M
-        for j, t in enumerate(true):
-            if used[j] or t["story"] != o["story"] or float(n @ t["normal"]) < 0.9:
+        for j, faces in enumerate(true):
+            if used[j]:
                 continue
-            dist = float(np.linalg.norm(np.subtract(o["center"], t["center"])))
-            if dist <= best_d:
-                best, best_d = j, dist
+            for t in faces:
+                if t["story"] != o["story"] or float(n @ t["normal"]) < 0.9:
+                    continue
+                dist = float(np.linalg.norm(np.subtract(o["center"], t["center"])))
+                if dist <= best_d:
+                    best, best_d = j, dist
         if best is not None:
             used[best] = True
             tp += 1
-            width_err.append(abs(o["width"] - true[best]["width"]))
+            width_err.append(abs(o["width"] - true[best][0]["width"]))
     return {
         "found": len(found),
         "true": len(true),

@@ -1,16 +1,25 @@
 """Doors and windows: openings in the flat walls (not in the paper, which left them to future work).
 
-Each wall's triangles are rasterized on a grid along the wall and up (``opening_cell_m``). The
-bands next to the floor and the ceiling are ignored (scanners round the corners off there). Every
-empty region of the grid that is enclosed by wall, roughly rectangular, and of a plausible size
-is an opening:
+Each flat wall face is searched for openings by :mod:`meshplan.plan.doors`: gaps in a raster of
+the wall's slab (both its faces and collinear pieces, so a door between two pieces of wall, seen
+from one side only, or next to a corner is found) and, in parametric models, separate door panels
+in the wall plane. The bands next to the floor and the ceiling are ignored (scanners round the
+corners off there).
 
-* a *door* reaches down to the floor, is ``door_width_m`` wide and ``door_height_m`` high, and
-  has wall above it (a full-height gap is a missing piece of scan, not a door);
-* a *window* has wall below it (a sill at least ``window_sill_m`` above the floor) and above it.
+* a *door* reaches down to the floor, is ``door_width_m`` wide, has straight jambs and a head at
+  least ``door_height_m`` high with wall above it; where the scan missed the lintel, a gap up to
+  the ceiling is a door only when the floor is seen through it (a full-height gap in an outer
+  wall is a missing piece of scan, not a door);
+* a *window* has wall below it (a sill at least ``window_sill_m`` above the floor) and above it,
+  and straight edges all round.
 
-Random holes in a scan are not rectangular and are left alone. The opening's edges are then
-refined from the triangle corners along them, well below the grid cell.
+Random holes in a scan are ragged and are left alone. The opening's edges are refined from the
+triangle corners along them, well below the grid cell.
+
+A wall seen from both rooms shows each of its openings on both faces: the finds of the faces of
+one physical wall (and of collinear pieces) that overlap along it are one opening, with the
+clear width and height where both were measured (the narrower jambs, the lower head), listed on
+one face and cut out of every face it passes through (``faces``).
 """
 
 from __future__ import annotations
@@ -18,13 +27,20 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import ndimage
 
 from ..geometry import FloatArray, IntArray, Mesh
 from ..orient import Orientation
-from ..walls import FlatWalls
+from ..walls import FlatWalls, PhysicalWall, WallParams, physical_walls
+from .doors import Candidate, WallEvidence, wall_candidates
 from .params import PlanParams
-from .rooms import sample_triangles
+
+#: Two finds on parallel faces are one opening when their intervals along the wall overlap by
+#: at least this share of the narrower (the two faces of a doorway measure nearly the same
+#: jambs; two doors side by side do not overlap at all).
+SAME_OPENING_OVERLAP = 0.5
+#: Faces within this angle (degrees) are parallel for merging: the faces of one wall share a
+#: wall direction, whose members are exactly parallel.
+PARALLEL_DEG = 10.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -39,6 +55,10 @@ class Openings:
     u_max: FloatArray
     bottom: FloatArray
     top: FloatArray
+    #: Per opening, the flat wall faces it passes through, each with the rectangle
+    #: ``(face, u_min, u_max, bottom, top)`` to cut out of it (in that face's own ``u``); the
+    #: listed ``wall`` first. Empty: only ``wall`` (openings made by hand).
+    faces: tuple[tuple[tuple[int, float, float, float, float], ...], ...] = ()
 
     def __len__(self) -> int:
         return int(len(self.wall))
@@ -56,7 +76,9 @@ class Openings:
         """Wall index -> rectangles ``(u_min, u_max, bottom, top)`` to cut out of the flat walls."""
         out: dict[int, list] = {}
         for i in range(len(self)):
-            out.setdefault(int(self.wall[i]), []).append((self.u_min[i], self.u_max[i], self.bottom[i], self.top[i]))
+            cuts = self.faces[i] if i < len(self.faces) and self.faces[i] else ((int(self.wall[i]), self.u_min[i], self.u_max[i], self.bottom[i], self.top[i]),)
+            for face, u0, u1, b, t in cuts:
+                out.setdefault(int(face), []).append((u0, u1, b, t))
         return out
 
     def to_list(self, walls: FlatWalls, ndigits: int = 4) -> list[dict]:
@@ -77,25 +99,48 @@ class Openings:
 
 def _empty() -> Openings:
     z = np.zeros(0)
-    return Openings(np.zeros(0, np.int64), (), np.zeros(0, np.int64), z, z, z, z)
+    return Openings(np.zeros(0, np.int64), (), np.zeros(0, np.int64), z, z, z, z, ())
 
 
-def find_openings(mesh: Mesh, orientation: Orientation, walls: FlatWalls, params: PlanParams | None = None) -> Openings:
-    """Doors and windows in every flat wall."""
+
+
+def find_openings(
+    mesh: Mesh,
+    orientation: Orientation,
+    walls: FlatWalls,
+    params: PlanParams | None = None,
+    physical: tuple[PhysicalWall, ...] | None = None,
+) -> Openings:
+    """Doors and windows in every flat wall, one per physical opening.
+
+    Parameters
+    ----------
+    mesh
+        The mesh in the plan frame.
+    orientation
+        Its stories (floors and ceilings).
+    walls
+        The flat wall faces searched.
+    params
+        Thresholds (:class:`PlanParams`).
+    physical
+        The faces paired into physical walls (:func:`meshplan.walls.physical_walls`), whose
+        faces' openings are one; by default paired here with the default wall parameters.
+    """
     params = params or PlanParams()
-    face_wall = walls.face_walls()
-    order = np.argsort(face_wall, kind="stable")
-    sorted_walls = face_wall[order]
-    rows: list[tuple] = []
-    for w in range(len(walls)):
-        a, b = np.searchsorted(sorted_walls, [w, w + 1])
-        faces = order[a:b]
-        if not len(faces):
-            continue
-        story = orientation.stories[int(walls.story[w])]
-        rows.extend(_wall_openings(mesh.triangles[faces], walls, w, story.floor, story.ceiling, params))
-    if not rows:
+    if not len(walls):
         return _empty()
+    if physical is None:
+        wp = WallParams()
+        physical = physical_walls(walls, wp.max_wall_thickness_m, wp.default_wall_thickness_m)
+    ev = WallEvidence(mesh, walls, params)
+    found: list[Candidate] = []
+    for w in range(len(walls)):
+        story = orientation.stories[int(walls.story[w])]
+        found.extend(wall_candidates(ev, w, story.floor, story.ceiling))
+    if not found:
+        return _empty()
+    rows = _merge(found, walls, physical, params)
     rows.sort(key=lambda r: (int(walls.story[r[1]]), r[1], r[2]))
     return Openings(
         story=np.array([walls.story[r[1]] for r in rows], dtype=np.int64),
@@ -105,69 +150,93 @@ def find_openings(mesh: Mesh, orientation: Orientation, walls: FlatWalls, params
         u_max=np.array([r[3] for r in rows]),
         bottom=np.array([r[4] for r in rows]),
         top=np.array([r[5] for r in rows]),
+        faces=tuple(r[6] for r in rows),
     )
 
 
-def _wall_openings(tri: FloatArray, walls: FlatWalls, w: int, floor: float, ceiling: float, params: PlanParams) -> list[tuple]:
-    cell = params.opening_cell_m
-    t3 = np.array([walls.tangent[w][0], 0.0, walls.tangent[w][1]])
-    u0, u1 = walls.u_min[w], walls.u_max[w]
-    pts = sample_triangles(tri, 0.7 * cell)
-    pu, py = pts @ t3, pts[:, 1]
-    ncol = max(1, int(np.ceil((u1 - u0) / cell)))
-    nrow = max(1, int(np.ceil((ceiling - floor) / cell)))
-    c = np.clip(np.floor((pu - u0) / cell).astype(np.int64), 0, ncol - 1)
-    r = np.clip(np.floor((py - floor) / cell).astype(np.int64), 0, nrow - 1)
-    grid = np.zeros((nrow, ncol), dtype=bool)
-    grid[r, c] = True
-    grid = ndimage.binary_closing(grid, structure=np.ones((2, 2)), border_value=1)
-    margin = int(np.ceil(params.opening_margin_m / cell))
-    grid[:margin] = True
-    grid[nrow - margin :] = True
-    labels, n = ndimage.label(~grid)
-    if n == 0:
-        return []
-    verts = tri.reshape(-1, 3)
-    vu, vy = verts @ t3, verts[:, 1]
-    out = []
-    for k, sl in enumerate(ndimage.find_objects(labels), start=1):
-        rs, cs = sl
-        if cs.start == 0 or cs.stop == ncol:
-            continue  # open to the end of the wall
-        box = labels[sl] == k
-        if box.mean() < params.opening_rectangularity:
-            continue
-        left, right = u0 + cs.start * cell, u0 + cs.stop * cell
-        low, high = floor + rs.start * cell, floor + rs.stop * cell
-        width, touches_floor = right - left, rs.start <= margin
-        if rs.stop >= nrow - margin:
-            continue  # no wall above: a missing strip, not an opening
-        kind = None
-        door_wide = params.door_width_m[0] - 2 * cell <= width <= params.door_width_m[1] + 2 * cell
-        window_wide = params.window_width_m[0] - 2 * cell <= width <= params.window_width_m[1] + 2 * cell
-        if touches_floor and door_wide and high - floor >= params.door_height_m - 2 * cell:
-            kind = "door"
-        elif not touches_floor and low - floor >= params.window_sill_m - cell and window_wide and high - low >= params.window_height_m:
-            kind = "window"
-        if kind is None:
-            continue
-        # refine the edges from the triangle corners next to them
-        band = (vy > low + 2 * cell) & (vy < high - 2 * cell)
-        mid = 0.5 * (left + right)
-        lv = vu[band & (vu <= mid) & (vu >= left - 2 * cell)]
-        rv = vu[band & (vu >= mid) & (vu <= right + 2 * cell)]
-        left = float(lv.max()) if len(lv) else left
-        right = float(rv.min()) if len(rv) else right
-        across = (vu > left + 2 * cell) & (vu < right - 2 * cell)
-        tv = vy[across & (vy >= 0.5 * (low + high)) & (vy <= high + 2 * cell)]
-        top = float(tv.min()) if len(tv) else high
-        if kind == "door":
-            bottom = floor
-        else:
-            bv = vy[across & (vy <= 0.5 * (low + high)) & (vy >= low - 2 * cell)]
-            bottom = float(bv.max()) if len(bv) else low
-        limits = params.door_width_m if kind == "door" else params.window_width_m
-        if not (limits[0] <= right - left <= limits[1]):
-            continue
-        out.append((kind, w, left, right, bottom, top))
-    return out
+def _along(walls: FlatWalls, src: int, dst: int, u: float) -> float:
+    """``u`` along face ``src`` at its plane, as ``u`` along face ``dst``."""
+    p = walls.offset[src] * walls.normal[src] + u * walls.tangent[src]
+    return float(walls.tangent[dst] @ p)
+
+
+def _merge(found: list[Candidate], walls: FlatWalls, physical: tuple[PhysicalWall, ...], params: PlanParams) -> list[tuple]:
+    """One row ``(kind, wall, u_min, u_max, bottom, top, cuts)`` per physical opening.
+
+    Finds of one kind on parallel faces of a story whose planes lie within a wall's depth and
+    whose intervals overlap are the same opening (union-find over the pairs).
+    """
+    n = len(found)
+    parent = list(range(n))
+
+    def root(i: int) -> int:
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+
+    depth = params.opening_wall_depth_m + 2 * params.opening_slab_m
+    cos = np.cos(np.radians(PARALLEL_DEG))
+    for i in range(n):
+        a = found[i]
+        for j in range(i + 1, n):
+            b = found[j]
+            if a.kind != b.kind or walls.story[a.wall] != walls.story[b.wall]:
+                continue
+            if abs(float(walls.normal[a.wall] @ walls.normal[b.wall])) < cos:
+                continue
+            mid_b = walls.offset[b.wall] * walls.normal[b.wall] + 0.5 * (b.u_min + b.u_max) * walls.tangent[b.wall]
+            if abs(float(walls.normal[a.wall] @ mid_b) - walls.offset[a.wall]) > depth:
+                continue
+            lo_b, hi_b = sorted((_along(walls, b.wall, a.wall, b.u_min), _along(walls, b.wall, a.wall, b.u_max)))
+            overlap = min(a.u_max, hi_b) - max(a.u_min, lo_b)
+            if overlap >= SAME_OPENING_OVERLAP * min(a.u_max - a.u_min, hi_b - lo_b):
+                parent[root(j)] = root(i)
+    groups: dict[int, list[int]] = {}
+    for i in range(n):
+        groups.setdefault(root(i), []).append(i)
+    partner: dict[int, tuple[int, ...]] = {}
+    for pw in physical:
+        for f in pw.faces:
+            partner[int(f)] = tuple(int(g) for g in pw.faces)
+    rows = []
+    for members in groups.values():
+        cands = [found[i] for i in members]
+        rows.append(_one_opening(cands, walls, partner, params))
+    return rows
+
+
+def _one_opening(cands: list[Candidate], walls: FlatWalls, partner: dict[int, tuple[int, ...]], params: PlanParams) -> tuple:
+    """The merged opening of the finds ``cands`` of one physical opening."""
+    # listed on a face that holds it (its centre on the face), the lowest index among those
+    ref = cands[0].wall
+    lo = [_along(walls, c.wall, ref, c.u_min) for c in cands]
+    hi = [_along(walls, c.wall, ref, c.u_max) for c in cands]
+    spans = [sorted(p) for p in zip(lo, hi)]
+    mid = float(np.median([0.5 * (a + b) for a, b in spans]))
+    faces = sorted({c.wall for c in cands})
+
+    def holds(f: int) -> bool:
+        u = _along(walls, ref, f, mid)
+        return bool(walls.u_min[f] - params.opening_cell_m <= u <= walls.u_max[f] + params.opening_cell_m)
+
+    wall = next((f for f in faces if holds(f)), faces[0])
+    spans = [sorted((_along(walls, c.wall, wall, c.u_min), _along(walls, c.wall, wall, c.u_max))) for c in cands]
+    # the clear opening: the narrower jambs and the lower head that any face measured, unless
+    # the finds disagree so much that they barely overlap (then their medians)
+    u0, u1 = max(s[0] for s in spans), min(s[1] for s in spans)
+    if u1 - u0 < SAME_OPENING_OVERLAP * float(np.median([s[1] - s[0] for s in spans])):
+        u0, u1 = float(np.median([s[0] for s in spans])), float(np.median([s[1] for s in spans]))
+    kind = cands[0].kind
+    bottom = max(c.bottom for c in cands)
+    top = min(c.top for c in cands)
+    cut_faces = [wall] + [f for f in faces if f != wall]
+    for f in list(cut_faces):
+        cut_faces.extend(g for g in partner.get(f, ()) if g not in cut_faces)
+    cuts = []
+    for f in cut_faces:
+        a, b = sorted((_along(walls, wall, f, u0), _along(walls, wall, f, u1)))
+        a, b = max(a, float(walls.u_min[f])), min(b, float(walls.u_max[f]))
+        if b > a:
+            cuts.append((int(f), a, b, float(bottom), float(top)))
+    return (kind, int(wall), float(u0), float(u1), float(bottom), float(top), tuple(cuts))

@@ -1,0 +1,537 @@
+"""Door and window candidates in one wall face (used by :mod:`meshplan.plan.openings`).
+
+Two kinds of evidence, both read in the face's own frame (``u`` along the wall, ``y`` up, ``d``
+across it, positive into the room the face was scanned from):
+
+* **gaps**: every triangle of the story that faces along the wall's normal (either way, within
+  ``opening_facing_deg``) and lies in the wall's *slab* (from ``opening_slab_m`` in front of
+  the face to ``opening_wall_depth_m`` behind it) is rasterized on a grid along the wall and
+  up. The slab holds the face, the other face of the same wall and pieces of the same wall set
+  back or forward a little, so a door between two collinear pieces is a gap in one raster, and
+  a door seen from one side only is a gap too. A door leaf standing open, a jamb, a reveal face
+  along the wall's normal, not across it, so they do not fill the gap. The raster runs on past
+  the face's ends by up to the widest door, so a gap between this face and the next piece of
+  wall is seen; where a perpendicular wall crosses the line (a corner) the raster stops and the
+  corner is a jamb. An empty region is a door when it reaches the floor, has a door's width,
+  straight jambs and a head at door height (a lintel above it), or, where the scan missed the
+  lintel, runs up to the ceiling with the floor seen through it beyond the wall. It is a window
+  when it has a sill and a head and straight edges on all four sides. Scan holes are ragged and
+  are left alone.
+* **panels**: parametric models (RoomPlan, Quest scene models) model a door as a separate box or
+  quad in the wall plane, over an uncut wall. A separate connected piece of the mesh that lies
+  in the wall's slab, covers its rectangle, stands on the floor, has a door's width and height
+  and ends below the ceiling is such a door.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import ndimage
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+
+from ..geometry import FloatArray, IntArray, Mesh
+from ..walls import FlatWalls
+from .params import PlanParams
+from .rooms import sample_triangles
+
+#: Edges longer than this (m) are halved before sampling: :func:`sample_triangles` puts at most 64
+#: samples along an edge, too few on a parametric wall's 5-10 m triangles for a 5 cm grid.
+MAX_SAMPLED_EDGE_M = 1.5
+
+#: Faces whose normal is within this of vertical (cosine) and that lie within
+#: :data:`FLOOR_BAND_M` of the story's floor are floor (seen through a doorway).
+FLOOR_NORMAL_COS = 0.9
+#: Height band (m) around the story's floor in which floor faces are looked for (floor noise
+#: and the few centimetres of a threshold).
+FLOOR_BAND_M = 0.1
+#: How far beyond a wall's face (m) the floor seen through a gap is looked for: the wall's
+#: thickness and about a metre of the room behind, which any scan of that room shows.
+FLOOR_BEYOND_M = 1.2
+
+#: Faces reaching further than this (m) from their centroid (parametric models' large
+#: triangles) are tested one by one; smaller ones are found by their sorted centroids.
+BIG_FACE_M = 0.5
+
+#: A parametric door panel covers at least this share of its bounding rectangle on the grid (a
+#: box or quad does, a stray fragment of a real scan does not).
+PANEL_COVERAGE = 0.9
+#: Pieces of more faces than this are not parametric door panels (a box is 12 triangles, a
+#: quad 2; a real scan's fragments of this size are furniture or clutter).
+PANEL_MAX_FACES = 200
+
+#: Tallest common door head above the floor (m; heads are 1.9-2.4 m): beside a gap whose lintel
+#: the scan missed, a wall rises above it, while wardrobes and partition screens (2.0-2.2 m) do not.
+DOOR_HEAD_MAX_M = 2.4
+
+#: Cells (of ``opening_cell_m``) an edge may stray from its median and still be straight, and
+#: the tolerance of the size tests: the grid's own quantization and the closing.
+EDGE_CELLS = 2
+#: The same for a window's four edges, one cell: a window is small, and a round scan hole of
+#: half a metre keeps its edge within two cells of the median over most of its height.
+WINDOW_EDGE_CELLS = 1
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """One opening found in one wall face (``u`` along its tangent, heights in the plan frame)."""
+
+    kind: str
+    wall: int
+    u_min: float
+    u_max: float
+    bottom: float
+    top: float
+    how: str  # "gap", "no lintel" (the scan missed the lintel), "corner" or "panel"
+
+
+class WallEvidence:
+    """The mesh arranged once for every wall face's search."""
+
+    def __init__(self, mesh: Mesh, walls: FlatWalls, params: PlanParams) -> None:
+        self.mesh = mesh
+        self.walls = walls
+        self.params = params
+        self.tri = mesh.triangles
+        self.normals = mesh.face_normals
+        self.centroids = mesh.face_centroids
+        cos = np.cos(np.radians(params.opening_facing_deg))
+        # vertical enough to be wall (either winding: HoloLens meshes mix them)
+        self.vertical = np.flatnonzero(np.abs(self.normals[:, 1]) <= np.sin(np.radians(params.opening_facing_deg)) + 1e-12)
+        self.cos = cos
+        self.floorish = np.flatnonzero(np.abs(self.normals[:, 1]) >= FLOOR_NORMAL_COS)
+        # each face's reach from its centroid, so that a cheap test on centroids finds the
+        # faces that may cross a wall's slab before their corners are projected
+        self.radius = np.max(np.linalg.norm(self.tri - self.centroids[:, None, :], axis=2), axis=1) if len(self.tri) else np.zeros(0)
+        self._cache: dict[tuple, tuple[FloatArray, IntArray, IntArray]] = {}
+        self._panels: tuple[IntArray, IntArray] | None = None
+
+    def _sorted(self, key: tuple, w: int, faces: IntArray) -> tuple[FloatArray, IntArray, IntArray]:
+        """``faces`` with a small reach sorted by their centroids' position along face ``w``'s
+        direction normal, and those with a large reach (parametric triangles), cached by ``key``."""
+        if key not in self._cache:
+            n3 = self._direction_normal(w)
+            big = self.radius[faces] > BIG_FACE_M
+            small = faces[~big]
+            pos = self.centroids[small] @ n3
+            order = np.argsort(pos, kind="stable")
+            self._cache[key] = (pos[order], small[order], faces[big])
+        return self._cache[key]
+
+    def _direction_normal(self, w: int) -> FloatArray:
+        d = self.walls.directions[int(self.walls.direction[w])]
+        return np.array([d[0], 0.0, d[1]])
+
+    def slab_faces(self, faces: IntArray, key: tuple, w: int, d_range: tuple[float, float]) -> IntArray:
+        """The ``faces`` (cached by ``key``) that may reach into ``d_range`` across face ``w``."""
+        pos, small, big = self._sorted(key, w, faces)
+        n_dir = self._direction_normal(w)
+        n3 = np.array([self.walls.normal[w][0], 0.0, self.walls.normal[w][1]])
+        sign = 1.0 if float(n_dir @ n3) > 0 else -1.0
+        off = float(self.walls.offset[w])
+        a, b = sorted((sign * (d_range[0] + off), sign * (d_range[1] + off)))
+        i, j = np.searchsorted(pos, [a - BIG_FACE_M, b + BIG_FACE_M])
+        return np.concatenate([small[i:j], big])
+
+    def facing(self, w: int, d_range: tuple[float, float]) -> IntArray:
+        """The vertical faces facing along face ``w``'s normal that may reach ``d_range``."""
+        key = ("facing", int(self.walls.direction[w]))
+        if key not in self._cache:
+            n3 = self._direction_normal(w)
+            v = self.vertical
+            self._sorted(key, w, v[np.abs(self.normals[v] @ n3) >= self.cos])
+        return self.slab_faces(np.zeros(0, np.int64), key, w, d_range)
+
+    def floor_faces(self, w: int, floor: float, d_range: tuple[float, float]) -> IntArray:
+        """The floor faces at height ``floor`` that may reach ``d_range`` across face ``w``."""
+        key = ("floor", int(self.walls.direction[w]), round(floor, 6))
+        if key not in self._cache:
+            f = self.floorish
+            self._sorted(key, w, f[np.abs(self.centroids[f, 1] - floor) <= FLOOR_BAND_M])
+        return self.slab_faces(np.zeros(0, np.int64), key, w, d_range)
+
+    def near(
+        self, faces: IntArray, n3: FloatArray, t3: FloatArray, off: float,
+        d_range: tuple[float, float], u_range: tuple[float, float], y_range: tuple[float, float],
+    ) -> IntArray:
+        """The ``faces`` whose reach from their centroid overlaps the box ``d_range`` across,
+        ``u_range`` along and ``y_range`` up a wall (a superset of those crossing it)."""
+        c, r = self.centroids[faces], self.radius[faces]
+        d, u = c @ n3 - off, c @ t3
+        ok = (d + r >= d_range[0]) & (d - r <= d_range[1]) & (u + r >= u_range[0]) & (u - r <= u_range[1])
+        ok &= (c[:, 1] + r >= y_range[0]) & (c[:, 1] - r <= y_range[1])
+        return faces[ok]
+
+    def panels(self) -> tuple[IntArray, IntArray]:
+        """``(faces, starts)``: the faces of every small separate piece of the mesh that is tall
+        enough for a door, grouped (piece ``i`` is ``faces[starts[i]:starts[i + 1]]``)."""
+        if self._panels is None:
+            f = self.mesh.faces
+            empty = (np.zeros(0, np.int64), np.zeros(1, np.int64))
+            if not len(f):
+                self._panels = empty
+                return empty
+            n_v = self.mesh.n_vertices
+            rows = np.r_[f[:, 0], f[:, 1]]
+            cols = np.r_[f[:, 1], f[:, 2]]
+            g = coo_matrix((np.ones(len(rows), np.int8), (rows, cols)), shape=(n_v, n_v))
+            _, vlab = connected_components(g, directed=False)
+            flab = vlab[f[:, 0]]
+            k = int(flab.max()) + 1
+            counts = np.bincount(flab, minlength=k)
+            y = self.tri[:, :, 1]
+            ymin = np.full(k, np.inf)
+            ymax = np.full(k, -np.inf)
+            np.minimum.at(ymin, flab, y.min(axis=1))
+            np.maximum.at(ymax, flab, y.max(axis=1))
+            tall = (counts <= PANEL_MAX_FACES) & (ymax - ymin >= self.params.door_height_m - EDGE_CELLS * self.params.opening_cell_m)
+            sel = np.flatnonzero(tall[flab])
+            if not len(sel):
+                self._panels = empty
+                return empty
+            order = sel[np.argsort(flab[sel], kind="stable")]
+            lab = flab[order]
+            starts = np.r_[0, np.flatnonzero(np.diff(lab)) + 1, len(order)]
+            self._panels = (order, starts.astype(np.int64))
+        return self._panels
+
+
+def _subdivide(tri: FloatArray, longest: float) -> FloatArray:
+    """Split triangles into four at their edge midpoints until no edge exceeds ``longest``."""
+    out = []
+    while len(tri):
+        edge = np.max(np.linalg.norm(tri - np.roll(tri, 1, axis=1), axis=2), axis=1)
+        big = edge > longest
+        out.append(tri[~big])
+        t = tri[big]
+        if not len(t):
+            break
+        a, b, c = t[:, 0], t[:, 1], t[:, 2]
+        ab, bc, ca = 0.5 * (a + b), 0.5 * (b + c), 0.5 * (c + a)
+        tri = np.concatenate([np.stack(s, axis=1) for s in ((a, ab, ca), (ab, b, bc), (ca, bc, c), (ab, bc, ca))])
+    return np.concatenate(out) if out else np.zeros((0, 3, 3))
+
+
+def _straight(box: np.ndarray, tolerance: int, share: float) -> bool:
+    """Whether the first and last filled cell of each row of ``box`` stay within ``tolerance``
+    cells of their medians in at least ``share`` of the rows (a straight pair of edges)."""
+    rows = np.flatnonzero(box.any(axis=1))
+    if not len(rows):
+        return False
+    b = box[rows]
+    first = np.argmax(b, axis=1)
+    last = b.shape[1] - 1 - np.argmax(b[:, ::-1], axis=1)
+    ok = (np.abs(first - np.median(first)) <= tolerance) & (np.abs(last - np.median(last)) <= tolerance)
+    return bool(ok.mean() >= share)
+
+
+def _corner_limits(walls: FlatWalls, w: int, lo: float, hi: float, corner: float) -> tuple[float | None, float | None]:
+    """Where perpendicular walls of the same story cross face ``w``'s line just beyond its ends
+    (within ``corner`` of the searched range ``[lo, hi]``'s face ends): the corners that end it."""
+    n, t, off = walls.normal[w], walls.tangent[w], walls.offset[w]
+    left = right = None
+    for p in range(len(walls)):
+        if p == w or walls.story[p] != walls.story[w]:
+            continue
+        c = float(walls.normal[p] @ t)
+        if abs(c) < np.cos(np.radians(10.0)):
+            continue
+        u = (walls.offset[p] - off * float(walls.normal[p] @ n)) / c
+        point = off * n + u * t
+        up = float(walls.tangent[p] @ point)
+        if not (walls.u_min[p] - corner <= up <= walls.u_max[p] + corner):
+            continue  # the perpendicular wall does not reach this wall's line
+        if lo - corner <= u <= walls.u_min[w] + corner and (left is None or u > left):
+            left = u
+        if walls.u_max[w] - corner <= u <= hi + corner and (right is None or u < right):
+            right = u
+    return left, right
+
+
+def wall_candidates(ev: WallEvidence, w: int, floor: float, ceiling: float) -> list[Candidate]:
+    """Doors and windows in flat wall face ``w`` of a story from ``floor`` to ``ceiling``."""
+    return _gaps(ev, w, floor, ceiling) + _panels(ev, w, floor, ceiling)
+
+
+def _gaps(ev: WallEvidence, w: int, floor: float, ceiling: float) -> list[Candidate]:
+    params, walls = ev.params, ev.walls
+    cell = params.opening_cell_m
+    n3 = np.array([walls.normal[w][0], 0.0, walls.normal[w][1]])
+    t3 = np.array([walls.tangent[w][0], 0.0, walls.tangent[w][1]])
+    off = float(walls.offset[w])
+    near, far = params.opening_slab_m, -(params.opening_wall_depth_m + params.opening_slab_m)
+    reach = params.door_width_m[1] + EDGE_CELLS * cell  # a door between this face and the next piece
+    lo, hi = walls.u_min[w] - reach, walls.u_max[w] + reach
+    left_corner, right_corner = _corner_limits(walls, w, lo, hi, params.door_corner_m)
+    if left_corner is not None:
+        lo = left_corner - EDGE_CELLS * cell
+    if right_corner is not None:
+        hi = right_corner + EDGE_CELLS * cell
+
+    # triangles of the slab that face along the wall's normal
+    cand = ev.near(ev.facing(w, (far, near)), n3, t3, off, (far, near), (lo, hi), (floor, ceiling))
+    tv = ev.tri[cand]
+    d = tv @ n3 - off
+    u = tv @ t3
+    y = tv[:, :, 1]
+    keep = (
+        (d.max(axis=1) >= far) & (d.min(axis=1) <= near)
+        & (u.max(axis=1) >= lo) & (u.min(axis=1) <= hi)
+        & (y.max(axis=1) >= floor) & (y.min(axis=1) <= ceiling)
+    )
+    tri = tv[keep]
+    if not len(tri):
+        return []
+    pts = sample_triangles(_subdivide(tri, MAX_SAMPLED_EDGE_M), 0.7 * cell)
+    pd = pts @ n3 - off
+    pts = pts[(pd >= far) & (pd <= near)]
+    pu, py = pts @ t3, pts[:, 1]
+    ncol = max(1, int(np.ceil((hi - lo) / cell)))
+    nrow = max(1, int(np.ceil((ceiling - floor) / cell)))
+    inside = (pu >= lo) & (pu < hi) & (py >= floor) & (py < ceiling)
+    c = np.clip(np.floor((pu[inside] - lo) / cell).astype(np.int64), 0, ncol - 1)
+    r = np.clip(np.floor((py[inside] - floor) / cell).astype(np.int64), 0, nrow - 1)
+    grid = np.zeros((nrow, ncol), dtype=bool)
+    grid[r, c] = True
+    grid = ndimage.binary_closing(grid, structure=np.ones((2, 2)), border_value=1)
+    margin = int(np.ceil(params.opening_margin_m / cell))
+    grid[:margin] = True
+    grid[nrow - margin :] = True
+    # a corner is a jamb: the perpendicular wall closes the raster there
+    if left_corner is not None:
+        grid[:, :EDGE_CELLS] = True
+    if right_corner is not None:
+        grid[:, ncol - EDGE_CELLS :] = True
+
+    verts = tri.reshape(-1, 3)
+    vd = verts @ n3 - off
+    verts = verts[(vd >= far) & (vd <= near)]
+    vu, vy = verts @ t3, verts[:, 1]
+    floor_cols = _floor_beyond(ev, w, n3, t3, off, floor, lo, ncol, cell, params)
+    frame = _Frame(grid, lo, floor, ceiling, cell, margin, vu, vy, w, left_corner is not None, right_corner is not None)
+    return _doors(frame, walls, floor_cols, params) + _windows(frame, walls, params)
+
+
+@dataclass(frozen=True)
+class _Frame:
+    """One face's raster (``grid[row, col]``: wall in the cell) and the triangle corners in its
+    slab (``vu``, ``vy``), from ``lo`` along the wall and ``floor`` up."""
+
+    grid: np.ndarray
+    lo: float
+    floor: float
+    ceiling: float
+    cell: float
+    margin: int
+    vu: FloatArray
+    vy: FloatArray
+    wall: int
+    left_corner: bool
+    right_corner: bool
+
+
+def _refine(f: _Frame, left: float, right: float, low: float, high: float) -> tuple[float, float]:
+    """The jambs of an opening at the triangle corners next to its grid edges."""
+    tol = EDGE_CELLS * f.cell
+    band = (f.vy > low + tol) & (f.vy < high - tol)
+    mid = 0.5 * (left + right)
+    lv = f.vu[band & (f.vu <= mid) & (f.vu >= left - tol)]
+    rv = f.vu[band & (f.vu >= mid) & (f.vu <= right + tol)]
+    return (float(lv.max()) if len(lv) else left), (float(rv.min()) if len(rv) else right)
+
+
+def _doors(f: _Frame, walls: FlatWalls, floor_cols: np.ndarray, params: PlanParams) -> list[Candidate]:
+    """Doors: runs of columns empty from the floor up to a door's height, between jambs.
+
+    Read column by column rather than as empty regions, so that a doorway stays a doorway
+    where its empty space runs on into a scan hole above the lintel or along the top of the
+    wall.
+    """
+    g, cell, m = f.grid, f.cell, f.margin
+    nrow, ncol = g.shape
+    tol = EDGE_CELLS * cell
+    body = g[m : nrow - m]
+    if not body.shape[0]:
+        return []
+    filled = body.any(axis=0)
+    # empty rows from the floor band up, per column, and whether anything is above them
+    first = np.where(filled, np.argmax(body, axis=0), body.shape[0])
+    head = f.floor + (m + first) * cell  # where the column's empty space from the floor ends
+    top_rows = body.shape[0] - 1 - np.argmax(body[::-1], axis=0)
+    col_top = np.where(filled, f.floor + (m + top_rows + 1) * cell, f.floor)  # highest wall in it
+    tall = head >= f.floor + params.door_height_m - tol
+    low_wall = first * cell <= 0.5 * params.door_height_m  # wall (a jamb) from near the floor
+    out = []
+    c = 0
+    while c < ncol:
+        if not tall[c]:
+            c += 1
+            continue
+        c0 = c
+        while c < ncol and tall[c]:
+            c += 1
+        c1 = c  # the run is [c0, c1)
+        # jambs: a column of wall from near the floor within a few cells on each side
+        lj = [k for k in range(c0 - 1, max(c0 - 1 - EDGE_CELLS, -1), -1) if low_wall[k]]
+        rj = [k for k in range(c1, min(c1 + EDGE_CELLS, ncol)) if low_wall[k]]
+        if c0 == 0 or c1 == ncol or not lj or not rj:
+            continue
+        left, right = f.lo + (lj[0] + 1) * cell, f.lo + rj[0] * cell
+        if right < walls.u_min[f.wall] - tol or left > walls.u_max[f.wall] + tol:
+            continue  # wholly beyond this face: another face's search finds it
+        if not params.door_width_m[0] - 2 * tol <= right - left <= params.door_width_m[1] + 2 * tol:
+            continue
+        run = slice(lj[0] + 1, rj[0])
+        closed = filled[run] & (head[run] < f.ceiling - params.opening_margin_m)
+        how = "gap"
+        if closed.mean() >= params.opening_edge_straightness:
+            heads = head[run][closed]
+            top = float(np.median(heads))
+            if np.mean(np.abs(heads - top) <= tol) < params.opening_edge_straightness:
+                continue  # a ragged top: a hole in the scan, not a lintel
+        elif not closed.any():
+            # no lintel scanned: the wall beside the gap rises above any door head, and the
+            # floor runs on through the gap beyond the wall
+            jamb_top = min(col_top[lj[0]], col_top[rj[0]])
+            if jamb_top < min(f.floor + DOOR_HEAD_MAX_M, f.ceiling - params.opening_margin_m - tol):
+                continue
+            if floor_cols[run].mean() < params.door_floor_beyond:
+                continue
+            top = f.ceiling
+            how = "no lintel"
+        else:
+            continue
+        left, right = _refine(f, left, right, f.floor + params.opening_margin_m, min(top, f.floor + params.door_height_m))
+        if not params.door_width_m[0] <= right - left <= params.door_width_m[1]:
+            continue
+        if (f.left_corner and lj[0] < EDGE_CELLS) or (f.right_corner and rj[0] >= ncol - EDGE_CELLS):
+            how = "corner"
+        across = (f.vu > left + tol) & (f.vu < right - tol)
+        tv = f.vy[across & (f.vy >= top - tol) & (f.vy <= top + tol)]
+        if how != "no lintel" and len(tv):
+            top = float(tv.min())
+        out.append(Candidate("door", f.wall, left, right, f.floor, top, how))
+    return out
+
+
+def _windows(f: _Frame, walls: FlatWalls, params: PlanParams) -> list[Candidate]:
+    """Windows: empty regions with wall below (a sill), above (a head) and beside them, and
+    straight edges all round."""
+    grid, lo, floor, cell, margin = f.grid, f.lo, f.floor, f.cell, f.margin
+    ceiling, vu, vy, w = f.ceiling, f.vu, f.vy, f.wall
+    nrow, ncol = grid.shape
+    labels, n = ndimage.label(~grid)
+    if n == 0:
+        return []
+    out = []
+    tol = EDGE_CELLS * cell
+    for k, sl in enumerate(ndimage.find_objects(labels), start=1):
+        rs, cs = sl
+        if cs.start == 0 or cs.stop == ncol:
+            continue  # open to the end of the searched line: no jamb there
+        box = labels[sl] == k
+        if box.mean() < params.opening_rectangularity:
+            continue
+        left, right = lo + cs.start * cell, lo + cs.stop * cell
+        low, high = floor + rs.start * cell, floor + rs.stop * cell
+        if right < walls.u_min[w] - tol or left > walls.u_max[w] + tol:
+            continue  # wholly beyond this face: the face there belongs to another wall's search
+        width = right - left
+        touches_floor = rs.start <= margin
+        reaches_top = rs.stop >= nrow - margin
+        window_wide = params.window_width_m[0] - 2 * tol <= width <= params.window_width_m[1] + 2 * tol
+        if touches_floor or reaches_top or not window_wide or low - floor < params.window_sill_m - cell or high - low < params.window_height_m:
+            continue
+        if not (_straight(box, WINDOW_EDGE_CELLS, params.opening_edge_straightness) and _straight(box.T, WINDOW_EDGE_CELLS, params.opening_edge_straightness)):
+            continue  # a ragged hole in the scan
+        kind = "window"
+        # refine the edges from the triangle corners next to them
+        band = (vy > low + tol) & (vy < min(high, ceiling - params.opening_margin_m) - tol)
+        mid = 0.5 * (left + right)
+        lv = vu[band & (vu <= mid) & (vu >= left - tol)]
+        rv = vu[band & (vu >= mid) & (vu <= right + tol)]
+        left = float(lv.max()) if len(lv) else left
+        right = float(rv.min()) if len(rv) else right
+        across = (vu > left + tol) & (vu < right - tol)
+        tv_ = vy[across & (vy >= 0.5 * (low + high)) & (vy <= high + tol)]
+        top = float(tv_.min()) if len(tv_) else high
+        bv = vy[across & (vy <= 0.5 * (low + high)) & (vy >= low - tol)]
+        bottom = float(bv.max()) if len(bv) else low
+        if not (params.window_width_m[0] <= right - left <= params.window_width_m[1]):
+            continue
+        out.append(Candidate(kind, w, left, right, bottom, top, "gap"))
+    return out
+
+
+def _floor_beyond(
+    ev: WallEvidence, w: int, n3: FloatArray, t3: FloatArray, off: float, floor: float, lo: float, ncol: int, cell: float, params: PlanParams
+) -> np.ndarray:
+    """``(ncol,)`` whether floor was scanned behind the face (through the wall) in each column."""
+    behind = (-FLOOR_BEYOND_M, -params.opening_slab_m)
+    f = ev.near(ev.floor_faces(w, floor, behind), n3, t3, off, behind, (lo, lo + ncol * cell), (floor - FLOOR_BAND_M, floor + FLOOR_BAND_M))
+    out = np.zeros(ncol, dtype=bool)
+    if not len(f):
+        return out
+    tri = ev.tri[f]
+    d = tri @ n3 - off
+    f_ok = (np.abs(ev.centroids[f, 1] - floor) <= FLOOR_BAND_M) & (d.max(axis=1) >= -FLOOR_BEYOND_M) & (d.min(axis=1) <= -params.opening_slab_m)
+    if not np.any(f_ok):
+        return out
+    u = tri[f_ok] @ t3
+    a = np.clip(np.floor((u.min(axis=1) - lo) / cell).astype(np.int64), 0, ncol)
+    b = np.clip(np.ceil((u.max(axis=1) - lo) / cell).astype(np.int64), 0, ncol)
+    # columns covered by a floor triangle: a difference array over the triangles' spans
+    diff = np.zeros(ncol + 1, np.int64)
+    np.add.at(diff, a, 1)
+    np.add.at(diff, b, -1)
+    out = np.cumsum(diff)[:ncol] > 0
+    return ndimage.binary_closing(out, structure=np.ones(3), border_value=1)
+
+
+def _panels(ev: WallEvidence, w: int, floor: float, ceiling: float) -> list[Candidate]:
+    """Separate door boxes or quads of a parametric model lying in face ``w``'s slab."""
+    params, walls = ev.params, ev.walls
+    faces, starts = ev.panels()
+    if len(starts) < 2:
+        return []
+    cell = params.opening_cell_m
+    tol = EDGE_CELLS * cell
+    n3 = np.array([walls.normal[w][0], 0.0, walls.normal[w][1]])
+    t3 = np.array([walls.tangent[w][0], 0.0, walls.tangent[w][1]])
+    off = float(walls.offset[w])
+    near, far = params.opening_slab_m, -(params.opening_wall_depth_m + params.opening_slab_m)
+    tri = ev.tri[faces]
+    d = (tri @ n3 - off).reshape(len(faces), 3)
+    u = (tri @ t3).reshape(len(faces), 3)
+    y = tri[:, :, 1]
+    seg = starts[:-1]
+    dmin, dmax = np.minimum.reduceat(d.min(1), seg), np.maximum.reduceat(d.max(1), seg)
+    umin, umax = np.minimum.reduceat(u.min(1), seg), np.maximum.reduceat(u.max(1), seg)
+    ymin, ymax = np.minimum.reduceat(y.min(1), seg), np.maximum.reduceat(y.max(1), seg)
+    width = umax - umin
+    ok = np.flatnonzero(
+        (dmin >= far) & (dmax <= near)
+        & (umin >= walls.u_min[w] - tol) & (umax <= walls.u_max[w] + tol)
+        & (ymin <= floor + params.opening_margin_m)
+        & (ymax - floor >= params.door_height_m - tol) & (ymax <= ceiling - params.opening_margin_m)
+        & (width >= params.door_width_m[0]) & (width <= params.door_width_m[1])
+    )
+    out = []
+    for i in ok:
+        fi = faces[starts[i] : starts[i + 1]]
+        along = np.abs(ev.normals[fi] @ n3) >= ev.cos
+        if not np.any(along):
+            continue
+        pts = sample_triangles(_subdivide(ev.tri[fi[along]], MAX_SAMPLED_EDGE_M), 0.7 * cell)
+        nc = max(1, int(np.ceil(width[i] / cell)))
+        nr = max(1, int(np.ceil((ymax[i] - ymin[i]) / cell)))
+        cc = np.clip(np.floor((pts @ t3 - umin[i]) / cell).astype(np.int64), 0, nc - 1)
+        rr = np.clip(np.floor((pts[:, 1] - ymin[i]) / cell).astype(np.int64), 0, nr - 1)
+        g = np.zeros((nr, nc), dtype=bool)
+        g[rr, cc] = True
+        if g.mean() < PANEL_COVERAGE:
+            continue
+        out.append(Candidate("door", w, float(umin[i]), float(umax[i]), floor, float(ymax[i]), "panel"))
+    return out
