@@ -12,9 +12,14 @@ Choices beyond the paper, all deterministic:
 * With ``wall_clusters=0`` the number of directions is found: after the four principal ones, any
   direction that still holds ``extra_direction_fraction`` of the wall area among the discarded
   normals is added and the clustering re-run (non-Manhattan buildings).
-* The yaw is refined with every principal cluster that lies within 5 degrees of the right-angle
-  lattice of the largest one (weighted circular mean of four times their azimuths), which halves
-  the noise of a single cluster.
+* The right-angle lattice is the one most of the wall area agrees with: each cluster proposes
+  the lattice of its direction, and the clusters within :data:`LATTICE_DEG` of it vote with
+  their area. The largest cluster of the winning lattice goes onto +x (the paper's largest
+  cluster, unless that one is a wall bent off the others by the drift of the scanner), and the
+  yaw is refined with every cluster of the lattice (weighted circular mean of four times their
+  azimuths), which halves the noise of a single cluster. A cluster a few degrees off is a wall
+  at its own angle (see :mod:`meshplan.walls.flat`): it neither turns the frame nor is
+  principal.
 """
 
 from __future__ import annotations
@@ -26,6 +31,13 @@ import numpy as np
 from ..geometry import FloatArray, unit
 from ..sphere import trimmed_spherical_kmeans
 from .params import OrientParams
+
+#: Clusters whose directions lie within this angle (degrees) of one right-angle lattice are
+#: the square walls of one building, seen with noise: the centres of clusters of square walls
+#: agree within a degree on headset and phone scans. A cluster farther off is a wall at its own
+#: angle (3-8 degrees for the drift of a headset, more for a wall built at an angle), which
+#: must not pull the frame off the square walls.
+LATTICE_DEG = 2.0
 
 
 @dataclass(frozen=True)
@@ -119,12 +131,18 @@ def align_walls(normals: FloatArray, areas: FloatArray, heights: FloatArray, flo
     wc, ww = res.centers[:n_walls], res.weights[:n_walls]
     horiz = unit(wc * np.array([1.0, 0.0, 1.0]))
     order = np.argsort(-ww, kind="stable")
-    largest = int(order[0])
-    yaw = float(_azimuth(horiz[largest]))
-    # refine with the clusters on the right-angle lattice of the largest
     azimuths = _azimuth(horiz)
+    # the lattice most of the wall area agrees with: each cluster's lattice, voted by area
+    pair = (azimuths[None, :] - azimuths[:, None] + np.pi / 4) % (np.pi / 2) - np.pi / 4
+    agree = (np.abs(pair) <= np.radians(LATTICE_DEG)) & (ww[None, :] > 0)
+    votes = (agree * ww[None, :]).sum(axis=1)
+    best = max(order, key=lambda i: (round(float(votes[i]), 9), float(ww[i])))  # ties: the larger cluster
+    members = agree[best]
+    largest = int(order[np.flatnonzero(members[order])[0]]) if members.any() else int(order[0])
+    yaw = float(_azimuth(horiz[largest]))
+    # refine with the clusters on the lattice
     off = (azimuths - yaw + np.pi / 4) % (np.pi / 2) - np.pi / 4
-    lattice = (np.abs(off) < np.radians(5.0)) & (ww > 0)
+    lattice = (np.abs(off) <= np.radians(LATTICE_DEG)) & (ww > 0)
     if lattice.sum() >= 2:
         yaw = yaw + float(np.arctan2((ww[lattice] * np.sin(4 * off[lattice])).sum(), (ww[lattice] * np.cos(4 * off[lattice])).sum()) / 4)
     principal = lattice

@@ -137,12 +137,17 @@ class StoryRaster:
     shelf
         Highest level, upward-facing surface in each cell above the floor and below the ceiling
         (m; ``nan`` where none): the tops of counters, desks, beds and shelves.
+    floor
+        Cells where the floor itself was scanned (a level, upward-facing surface within
+        :data:`FLOOR_CLEARANCE_M` of the floor height), as 1.0, else 0.0: what lies on the far
+        side of a piece of wall (:func:`floor_behind`).
     """
 
     x0: float
     z0: float
     top: FloatArray
     shelf: FloatArray
+    floor: FloatArray
 
     def sample(self, grid: FloatArray, x: FloatArray, z: FloatArray, outside: float) -> FloatArray:
         """Values of ``grid`` at plan points, ``outside`` beyond the raster."""
@@ -167,7 +172,7 @@ def story_raster(triangles: FloatArray, normals: FloatArray, floor: float, ceili
         Ceiling height where one was scanned, else ``None``.
     """
     if not len(triangles):
-        return StoryRaster(0.0, 0.0, np.full((1, 1), -np.inf), np.full((1, 1), np.nan))
+        return StoryRaster(0.0, 0.0, np.full((1, 1), -np.inf), np.full((1, 1), np.nan), np.zeros((1, 1)))
     centroid = triangles.mean(axis=1)
     points = np.concatenate([triangles, centroid[:, None]], axis=1)  # corners and centroid mark cells
     x0, z0 = points[..., 0].min(), points[..., 2].min()
@@ -185,7 +190,10 @@ def story_raster(triangles: FloatArray, normals: FloatArray, floor: float, ceili
     shelf = np.full(shape[0] * shape[1], -np.inf)
     np.maximum.at(shelf, cell[level].reshape(-1), np.repeat(centroid[level, 1], 4))
     shelf[np.isinf(shelf)] = np.nan
-    return StoryRaster(float(x0), float(z0), top.reshape(shape), shelf.reshape(shape))
+    on_floor = (normals[:, 1] >= np.cos(np.radians(HORIZONTAL_DEG))) & (np.abs(centroid[:, 1] - floor) <= FLOOR_CLEARANCE_M)
+    floor_cells = np.zeros(shape[0] * shape[1])
+    floor_cells[cell[on_floor].reshape(-1)] = 1.0
+    return StoryRaster(float(x0), float(z0), top.reshape(shape), shelf.reshape(shape), floor_cells.reshape(shape))
 
 
 @dataclass(frozen=True)
@@ -193,8 +201,12 @@ class Columns:
     """Vertical strips of the segments of one wall direction (one row per column).
 
     ``segment``, ``bin`` (index along the wall, ``floor(u / width)``), ``u_lo``/``u_hi``
-    (extent along the wall of its faces), ``bottom``/``top`` (heights of its faces) and
-    ``offset`` (its segment's plane); ``face_column`` is the column of every face.
+    (extent along the wall of its faces), ``bottom``/``top`` (heights of its faces),
+    ``offset`` (the plane of the column itself: the area-weighted median of its faces across
+    the wall, so that a wall a few degrees off its direction is followed along its length, not
+    sampled where its segment's mean plane passes), ``u`` (area-weighted mean position of its
+    faces along the wall) and ``area`` (of its faces, m2); ``face_column`` is the column of
+    every face.
     """
 
     segment: IntArray
@@ -204,13 +216,15 @@ class Columns:
     bottom: FloatArray
     top: FloatArray
     offset: FloatArray
+    u: FloatArray
+    area: FloatArray
     face_column: IntArray
 
     def __len__(self) -> int:
         return int(len(self.segment))
 
 
-def columns(labels: IntArray, u: FloatArray, vertex_u: FloatArray, vertex_y: FloatArray, offset: FloatArray, width_m: float) -> Columns:
+def columns(labels: IntArray, u: FloatArray, vertex_u: FloatArray, vertex_y: FloatArray, v: FloatArray, area: FloatArray, width_m: float) -> Columns:
     """Cut segments into columns ``width_m`` wide along the wall.
 
     Parameters
@@ -221,8 +235,10 @@ def columns(labels: IntArray, u: FloatArray, vertex_u: FloatArray, vertex_y: Flo
         ``(n,)`` position of each face's centroid along the wall (m): it picks the column.
     vertex_u, vertex_y
         ``(n, 3)`` positions along the wall and heights of each face's corners.
-    offset
-        ``(k,)`` plane of each segment (across the wall, m).
+    v
+        ``(n,)`` position of each face's centroid across the wall (m).
+    area
+        ``(n,)`` area of each face (m2): the weights of the column's plane and centre.
     width_m
         Column width (m).
     """
@@ -238,7 +254,26 @@ def columns(labels: IntArray, u: FloatArray, vertex_u: FloatArray, vertex_y: Flo
     np.maximum.at(u_hi, rep, vertex_u.reshape(-1))
     np.minimum.at(y_lo, rep, vertex_y.reshape(-1))
     np.maximum.at(y_hi, rep, vertex_y.reshape(-1))
-    return Columns(keys[:, 0], keys[:, 1], u_lo, u_hi, y_lo, y_hi, offset[keys[:, 0]], face_column)
+    col_area = np.bincount(face_column, weights=area, minlength=m).astype(np.float64)
+    centre = np.bincount(face_column, weights=area * u, minlength=m) / np.maximum(col_area, 1e-300)
+    offset = group_weighted_median(face_column, v, area, m)
+    return Columns(keys[:, 0], keys[:, 1], u_lo, u_hi, y_lo, y_hi, offset, centre, col_area, face_column)
+
+
+def group_weighted_median(labels: IntArray, values: FloatArray, weights: FloatArray, k: int) -> FloatArray:
+    """``(k,)`` weighted median of ``values`` in each group ``0 .. k-1`` of ``labels`` (every
+    group must hold at least one value): the plane of a wall or of a strip of it, robust to the
+    few faces of a fixture or a frame in front of it."""
+    order = np.lexsort((values, labels))
+    lab, val, w = labels[order], values[order], weights[order]
+    cw = np.cumsum(w)
+    start = np.searchsorted(lab, np.arange(k))
+    end = np.searchsorted(lab, np.arange(k), side="right")
+    before = np.where(start > 0, cw[np.maximum(start - 1, 0)], 0.0)
+    total = cw[end - 1] - before
+    target = before + 0.5 * total
+    idx = np.searchsorted(cw, target)
+    return val[np.clip(idx, start, end - 1)]
 
 
 def _region(raster: StoryRaster, grid: FloatArray, normal: FloatArray, cols: Columns, width_m: float, across: FloatArray, outside: float) -> FloatArray:
@@ -273,10 +308,45 @@ def top_attached(raster: StoryRaster, normal: FloatArray, cols: Columns, width_m
     return hit.mean(axis=1)
 
 
-def hidden_behind(cols: Columns, context_m: float, thickness_m: float) -> np.ndarray:
+def floor_behind(raster: StoryRaster, start: FloatArray, end: FloatArray, normal: FloatArray, thickness_m: float, depth_m: float) -> FloatArray:
+    """Share of the length of each wall face with the floor scanned behind it (on the side its
+    normal points away from), beyond ``thickness_m`` and within ``depth_m``.
+
+    A wall bounds a space: behind it is its other face, then another room or nothing the
+    scanner saw from inside. Floor scanned right behind a short piece means the scanner walked
+    around it: a free-standing panel, pillar or screen.
+
+    Parameters
+    ----------
+    start, end
+        ``(W, 2)`` plan ends of the faces.
+    normal
+        ``(W, 2)`` their normals (into the room they were scanned from).
+    thickness_m, depth_m
+        The band behind each face that is searched (m).
+    """
+    if not len(start):
+        return np.zeros(0)
+    step = RASTER_M / 2
+    along = (np.arange(8) + 0.5) / 8  # samples along each face
+    behind = np.arange(thickness_m + step, depth_m + 1e-9, step)
+    if not len(behind):
+        return np.zeros(len(start))
+    p = start[:, None, None, :] + along[None, :, None, None] * (end - start)[:, None, None, :]
+    p = p - behind[None, None, :, None] * normal[:, None, None, :]
+    hit = raster.sample(raster.floor, p[..., 0], p[..., 1], 0.0) > 0  # (W, 8, depth)
+    return hit.any(axis=2).mean(axis=1)
+
+
+def hidden_behind(cols: Columns, context_m: float, thickness_m: float, work_surface_m: float) -> np.ndarray:
     """Columns with a surface facing the same way behind them, deeper than ``thickness_m`` and
-    within ``context_m``, seen over :data:`MIN_BEHIND_SPAN_M`: the wall behind a cupboard, a
-    counter or a shelf, so that the column itself does not bound the space."""
+    within ``context_m``, seen over :data:`MIN_BEHIND_SPAN_M` and rising above the work surfaces
+    (``work_surface_m``, or the column's own top where that is lower; within
+    :data:`TOP_EDGE_TOLERANCE_M`): the wall behind a cupboard, a counter or a shelf, so that the
+    column itself does not bound the space. The height test keeps a partition whose far side has
+    furniture against it: the back of a desk or a sideboard in the next room faces the same way
+    and stands right behind the partition, but ends at table height, while a wall behind a front
+    rises above any work surface (where it is scanned above the front at all)."""
     tall = cols.top - cols.bottom >= MIN_BEHIND_SPAN_M
     out = np.zeros(len(cols), dtype=bool)
     if not tall.any():
@@ -284,9 +354,18 @@ def hidden_behind(cols: Columns, context_m: float, thickness_m: float) -> np.nda
     # per bin along the wall, the offsets of the tall columns, sorted: a window search
     order = np.lexsort((cols.offset[tall], cols.bin[tall]))
     tb, to = cols.bin[tall][order], cols.offset[tall][order]
+    ttop = cols.top[tall][order]
     lo = _search(tb, to, cols.bin, cols.offset - context_m, "left")
     hi = _search(tb, to, cols.bin, cols.offset - thickness_m, "right")
-    return hi > lo
+    # the highest top in each window [lo, hi): windows hold the few parallel surfaces of one bin,
+    # so a loop over the offset within the window (not over columns) covers them all
+    need = np.minimum(cols.top, work_surface_m) - TOP_EDGE_TOLERANCE_M
+    width = int((hi - lo).max()) if len(hi) else 0
+    for k in range(width):
+        idx = lo + k
+        inside = idx < hi
+        out[inside] |= ttop[idx[inside]] >= need[inside]
+    return out
 
 
 def _search(bins: IntArray, values: FloatArray, qbin: IntArray, qvalue: FloatArray, side: Literal["left", "right"]) -> IntArray:

@@ -22,17 +22,21 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.stats import t as student_t
 
 from ..geometry import FloatArray, IntArray, Mesh
 from ..orient import Orientation
 from .boxdbscan import box_dbscan
 from .evidence import (
+    FLOOR_CLEARANCE_M,
     MIN_COLUMN_SPAN_SHARE,
     MIN_TOP_SHARE,
     SPLIT_SHARE,
     Columns,
     StoryRaster,
     columns,
+    floor_behind,
+    group_weighted_median,
     hidden_behind,
     local_top,
     neighbour_max,
@@ -42,6 +46,45 @@ from .evidence import (
     top_attached,
 )
 from .params import WallParams
+
+#: A wall keeps the direction of its cluster unless its own direction differs from it
+#: significantly (besides ``snap_deg``), at this two-sided confidence: a short or wavy piece,
+#: whose few columns do not tell its direction better than its cluster does, is drawn along
+#: the cluster. The bound is Student's t quantile for the columns' degrees of freedom times
+#: the standard error of the fitted angle: three columns (0.7 m) need a 13 times larger
+#: deviation than the error, ten columns 2.3 times.
+SNAP_CONFIDENCE = 0.95
+
+#: Two pieces of wall are one plane only when their directions differ by at most this angle
+#: (degrees): the scatter of the directions fitted to pieces of one wall on either side of a
+#: door (0.3-1 degree), far below the kinks of a drifted scan (3-8 degrees), which stay chords.
+MERGE_DEG = 2.0
+
+#: Two walls are connected when they come this close in plan (m): the corners that scans leave
+#: open or rounded (headset meshes bevel corners over 0.1-0.2 m, and the segments stop where
+#: the faces turn past the facing tolerance), plus a partition's thickness for a return that
+#: meets the other face of a wall.
+CONNECT_M = 0.3
+
+#: A piece of wall with the floor scanned behind it along at least this share of its length
+#: has been walked around: half of it, so that a wall with a short gap of floor seen through a
+#: door behind it is not taken for a free-standing panel.
+FLOOR_BEHIND_SHARE = 0.5
+
+#: Vertical faces facing no wall direction (farther than the facing tolerance from every one)
+#: get a direction of their own when this much area (m2) faces within 5 degrees of one
+#: azimuth: a wall 0.8 m long (a chamfered corner, a single wall at an odd angle) seen floor
+#: to ceiling in a 2.5 m storey, more than the side of a wardrobe or an open door leaf.
+FILL_MIN_AREA_M2 = 2.0
+
+#: ... and when that area is at least this many times what the faces facing no direction
+#: hold on average per 10 degrees: the normals of headset meshes scatter over every azimuth
+#: (1-2 m2 per 10 degrees in a large hall), and only a wall stands out of that scatter.
+FILL_PEAK_RATIO = 3.0
+
+#: A face is vertical for the direction search when its normal is within this angle of the
+#: horizontal (degrees), as in the wall alignment.
+VERTICAL_DEG = 10.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -174,22 +217,58 @@ class FlatWalls:
         ]
 
 
-def wall_directions(orientation: Orientation, mode: str) -> FloatArray:
+def wall_directions(
+    orientation: Orientation,
+    mode: str,
+    normals: FloatArray | None = None,
+    areas: FloatArray | None = None,
+    facing_tolerance_deg: float = 25.0,
+) -> FloatArray:
     """``(D, 2)`` unit plan normals [nx, nz] the DBSCAN runs on.
 
     The principal directions are the exact axes (the alignment put the dominant walls on
-    them); other directions are the k-means centres.
+    them); other directions are the k-means centres. With ``normals`` and ``areas`` (the faces
+    of the stories, plan frame) and a mode other than ``principal``, vertical faces that face
+    none of these directions (beyond ``facing_tolerance_deg``) add a direction wherever
+    :data:`FILL_MIN_AREA_M2` of them face one azimuth: a wall at any angle has a direction to
+    be found in, even one too small to make a cluster of the alignment's k-means.
     """
     axes = np.array([[1.0, 0.0], [0.0, 1.0], [-1.0, 0.0], [0.0, -1.0]])
     others = [d.normal[[0, 2]] for d in orientation.alignment.directions if not d.principal]
-    if mode == "principal" or (mode == "auto" and not others):
-        return axes
     out = [a for a in axes]
-    for o in others:
-        o = o / np.linalg.norm(o)
-        if all(o @ a < np.cos(np.radians(10.0)) for a in out):
-            out.append(o)
-    return np.array(out)
+    if mode != "principal":
+        for o in others:
+            o = o / np.linalg.norm(o)
+            if all(o @ a < np.cos(np.radians(10.0)) for a in out):
+                out.append(o)
+    if mode == "principal" or normals is None or areas is None:
+        return np.array(out) if mode != "principal" and (mode == "all" or others) else axes
+    vertical = np.abs(normals[:, 1]) < np.sin(np.radians(VERTICAL_DEG))
+    plan = normals[vertical][:, [0, 2]]
+    plan = plan / np.maximum(np.linalg.norm(plan, axis=1), 1e-12)[:, None]
+    w = areas[vertical]
+    cos_tol = np.cos(np.radians(facing_tolerance_deg))
+    az = np.degrees(np.arctan2(plan[:, 1], plan[:, 0])) % 360.0
+    found = len(out) > 4 or mode == "all"
+    centres = np.radians(np.arange(360) + 0.5)
+    compass = np.c_[np.cos(centres), np.sin(centres)]
+    for _ in range(16):  # at most 16 directions more: one every 22 degrees
+        left = np.max(plan @ np.array(out).T, axis=1) < cos_tol
+        if not left.any():
+            break
+        hist = np.bincount(np.floor(az[left]).astype(np.int64) % 360, weights=w[left], minlength=360)
+        smooth = np.sum([np.roll(hist, k) for k in range(-5, 6)], axis=0)  # +-5 degrees
+        uncovered = np.max(compass @ np.array(out).T, axis=1) < cos_tol
+        background = 11.0 * float(hist[uncovered].mean()) if uncovered.any() else 0.0
+        j = int(np.argmax(smooth))
+        if smooth[j] < FILL_MIN_AREA_M2 or smooth[j] < FILL_PEAK_RATIO * background:
+            break
+        # the area-weighted mean azimuth of the faces within 5 degrees of the peak
+        near = left & (np.abs((az - (j + 0.5) + 180.0) % 360.0 - 180.0) <= 5.0)
+        mean = np.arctan2((w[near] * plan[near, 1]).sum(), (w[near] * plan[near, 0]).sum())
+        out.append(np.array([np.cos(mean), np.sin(mean)]))
+        found = True
+    return np.array(out) if found else axes
 
 
 def _group_minmax(labels: IntArray, values: FloatArray, k: int) -> tuple[FloatArray, FloatArray]:
@@ -200,37 +279,118 @@ def _group_minmax(labels: IntArray, values: FloatArray, k: int) -> tuple[FloatAr
     return lo, hi
 
 
-def _group_weighted_median(labels: IntArray, values: FloatArray, weights: FloatArray, k: int) -> FloatArray:
-    order = np.lexsort((values, labels))
-    lab, val, w = labels[order], values[order], weights[order]
-    cw = np.cumsum(w)
-    start = np.searchsorted(lab, np.arange(k))
-    end = np.searchsorted(lab, np.arange(k), side="right")
-    before = np.where(start > 0, cw[np.maximum(start - 1, 0)], 0.0)
-    total = cw[end - 1] - before
-    target = before + 0.5 * total
-    idx = np.searchsorted(cw, target)
-    return val[np.clip(idx, start, end - 1)]
+def _line_fit(u: FloatArray, v: FloatArray, w: FloatArray) -> tuple[float, float]:
+    """Weighted total least squares line through the points ``(u, v)``: its angle from the
+    ``u`` axis (radians, in (-pi/2, pi/2]) and the standard error of that angle (radians; inf
+    from fewer than three points)."""
+    total = w.sum()
+    du, dv = u - (w * u).sum() / total, v - (w * v).sum() / total
+    suu, svv, suv = (w * du * du).sum() / total, (w * dv * dv).sum() / total, (w * du * dv).sum() / total
+    angle = 0.5 * float(np.arctan2(2.0 * suv, suu - svv))
+    along = du * np.cos(angle) + dv * np.sin(angle)
+    across = dv * np.cos(angle) - du * np.sin(angle)
+    spread = float(np.sqrt((w * along**2).sum() / total))
+    if len(u) < 3 or spread <= 0:
+        return angle, np.inf
+    rms = float(np.sqrt((w * across**2).sum() / total))
+    return angle, rms / (spread * np.sqrt(len(u) - 2))
+
+
+def _deviation(u: FloatArray, v: FloatArray) -> FloatArray:
+    """Distances of the points ``(u, v)`` from the chord joining the first and the last."""
+    d = np.array([u[-1] - u[0], v[-1] - v[0]])
+    norm = float(np.hypot(*d))
+    if norm <= 0:
+        return np.zeros(len(u))
+    return np.abs((u - u[0]) * d[1] - (v - v[0]) * d[0]) / norm
+
+
+def _sse(u: FloatArray, v: FloatArray, w: FloatArray) -> float:
+    """Weighted sum of squared distances of the points from their total least squares line."""
+    total = w.sum()
+    du, dv = u - (w * u).sum() / total, v - (w * v).sum() / total
+    cov = np.array([[(w * du * du).sum(), (w * du * dv).sum()], [(w * du * dv).sum(), (w * dv * dv).sum()]])
+    return float(np.linalg.eigvalsh(cov)[0])
+
+
+def _chords(u: FloatArray, v: FloatArray, w: FloatArray, lo: FloatArray, hi: FloatArray, tol_m: float, min_length_m: float) -> list[tuple[int, int]]:
+    """Split a run of columns (sorted along the wall) into straight pieces: a piece whose
+    columns stray more than ``tol_m`` from the chord joining its first and last columns (as in
+    Douglas-Peucker) is cut where two straight lines fit its columns best (the least total
+    squared distance, so that a corner is cut at the corner and a step at the step), when both
+    parts keep ``min_length_m`` and two columns. A wall bent by the drift of the scanner, or
+    curved, becomes chords that each stay on it. Returns ``[start, stop)`` column ranges."""
+    out = []
+    stack = [(0, len(u))]
+    while stack:
+        a, b = stack.pop()
+        if b - a >= 4 and _deviation(u[a:b], v[a:b]).max() > tol_m:
+            cuts = [i for i in range(a + 2, b - 1) if hi[i - 1] - lo[a] >= min_length_m and hi[b - 1] - lo[i] >= min_length_m]
+            if cuts:
+                i = min(cuts, key=lambda i: _sse(u[a:i], v[a:i], w[a:i]) + _sse(u[i:b], v[i:b], w[i:b]))
+                stack.extend([(i, b), (a, i)])
+                continue
+        out.append((a, b))
+    return sorted(out)
+
+
+def _ends(r: dict) -> tuple[FloatArray, FloatArray]:
+    """Plan ends ``(start, end)`` of a wall row."""
+    n = np.asarray(r["normal"])
+    t = np.array([-n[1], n[0]])
+    return r["u_min"] * t + r["offset"] * n, r["u_max"] * t + r["offset"] * n
+
+
+def _mergeable(o: dict, r: dict, depth_half: float, gap: float, cos_merge: float) -> bool:
+    """Whether two rectangles are pieces of one plane: directions within :data:`MERGE_DEG`,
+    the ends of the shorter within ``depth_half`` of the longer's plane, and at most ``gap``
+    apart along it."""
+    no, nr = np.asarray(o["normal"]), np.asarray(r["normal"])
+    if no @ nr < cos_merge:
+        return False
+    long, short = (o, r) if o["u_max"] - o["u_min"] >= r["u_max"] - r["u_min"] else (r, o)
+    n = np.asarray(long["normal"])
+    t = np.array([-n[1], n[0]])
+    ends = np.array(_ends(short))
+    if np.any(np.abs(ends @ n - long["offset"]) > depth_half):
+        return False
+    a, b = sorted(ends @ t)
+    return bool(a <= long["u_max"] + gap and long["u_min"] <= b + gap)
+
+
+def _absorb(o: dict, r: dict) -> None:
+    """Merge row ``r`` into ``o``: the area-weighted direction and plane, the union of extents."""
+    total = o["area"] + r["area"]
+    n = o["area"] * np.asarray(o["normal"]) + r["area"] * np.asarray(r["normal"])
+    n = n / np.linalg.norm(n)
+    t = np.array([-n[1], n[0]])
+    mid_o, mid_r = (np.add(*_ends(o)) / 2), (np.add(*_ends(r)) / 2)
+    u = np.array(_ends(o) + _ends(r)) @ t
+    o["offset"] = float((o["area"] * (n @ mid_o) + r["area"] * (n @ mid_r)) / total)
+    o["normal"] = (float(n[0]), float(n[1]))
+    o["u_min"], o["u_max"] = float(u.min()), float(u.max())
+    o["bottom"], o["top"] = min(o["bottom"], r["bottom"]), max(o["top"], r["top"])
+    if r["area"] > o["area"]:
+        o["direction"] = r["direction"]
+    o["support"] += r["support"]
+    o["area"] = total
+    o["segments"] = o["segments"] + r["segments"]
 
 
 def _merge(rows: list[dict], depth_half: float, gap: float) -> list[dict]:
-    """Merge coplanar rectangles (one story, one direction) whose ends are close."""
-    rows = sorted(rows, key=lambda r: (r["offset"], r["u_min"]))
+    """Merge the rectangles of one story that are pieces of one plane (see :func:`_mergeable`):
+    coplanar pieces on either side of a door, and the same wall found in two overlapping
+    wall directions."""
+    cos_merge = np.cos(np.radians(MERGE_DEG))
     changed = True
     while changed:
         changed = False
-        rows.sort(key=lambda r: (r["u_min"], r["offset"]))
+        rows.sort(key=lambda r: (r["direction"], r["offset"], r["u_min"]))
         out: list[dict] = []
         for r in rows:
             for o in out:
-                if abs(o["offset"] - r["offset"]) <= depth_half and r["u_min"] <= o["u_max"] + gap and o["u_min"] <= r["u_max"] + gap:
-                    total = o["area"] + r["area"]
-                    o["offset"] = (o["offset"] * o["area"] + r["offset"] * r["area"]) / total
-                    o["u_min"], o["u_max"] = min(o["u_min"], r["u_min"]), max(o["u_max"], r["u_max"])
-                    o["bottom"], o["top"] = min(o["bottom"], r["bottom"]), max(o["top"], r["top"])
-                    o["support"] += r["support"]
-                    o["area"] = total
-                    o["segments"] = o["segments"] + r["segments"]
+                if _mergeable(o, r, depth_half, gap, cos_merge):
+                    _absorb(o, r)
                     changed = True
                     break
             else:
@@ -239,16 +399,130 @@ def _merge(rows: list[dict], depth_half: float, gap: float) -> list[dict]:
     return rows
 
 
-def _continues(below: list[dict], direction: int, offset: FloatArray, u_lo: FloatArray, u_hi: FloatArray, params: WallParams) -> np.ndarray:
+def _continues(below: list[dict], direction: int, d: FloatArray, offset: FloatArray, u_lo: FloatArray, u_hi: FloatArray, params: WallParams) -> np.ndarray:
     """Segments that continue, in the same plane, a wall of the story below reaching its
     ceiling: the upper part of a double-height wall (a void, a stair well), whose top the
     scanner rarely reached. They are walls although they stop short of this story's ceiling."""
     out = np.zeros(len(offset), dtype=bool)
+    t = np.array([-d[1], d[0]])
+    centre = 0.5 * (u_lo + u_hi)[:, None] * t + offset[:, None] * d
     for r in below:
         if r["direction"] != direction:
             continue
-        overlap = np.minimum(u_hi, r["u_max"]) - np.maximum(u_lo, r["u_min"])
-        out |= (np.abs(offset - r["offset"]) <= params.box_depth_m / 2) & (overlap >= 0.5 * (u_hi - u_lo))
+        n = np.asarray(r["normal"])
+        a, b = sorted(np.array(_ends(r)) @ t)
+        overlap = np.minimum(u_hi, b) - np.maximum(u_lo, a)
+        out |= (np.abs(centre @ n - r["offset"]) <= params.box_depth_m / 2) & (overlap >= 0.5 * (u_hi - u_lo))
+    return out
+
+
+def _own_normal(u: FloatArray, v: FloatArray, w: FloatArray, d: FloatArray, snap_rad: float) -> FloatArray | None:
+    """The plan normal of a straight piece of wall from its columns ``(u, v)`` (along and
+    across its cluster's direction ``d``, weights ``w``), or ``None`` where it keeps ``d``:
+    within ``snap_rad`` of it, or not significantly off it (:data:`SNAP_CONFIDENCE`)."""
+    angle, sigma = _line_fit(u, v, w)
+    bound = sigma * float(student_t.ppf(0.5 + SNAP_CONFIDENCE / 2, len(u) - 2)) if len(u) > 2 else np.inf
+    if abs(angle) <= max(snap_rad, bound):
+        return None
+    t = np.array([-d[1], d[0]])
+    return np.cos(angle) * d - np.sin(angle) * t
+
+
+def _pieces(cols: Columns, run: IntArray, keep_run: np.ndarray, d: FloatArray, params: WallParams) -> tuple[IntArray, list[FloatArray]]:
+    """Cut each kept run of columns into straight pieces and give each its own direction.
+
+    Each piece's direction is the weighted total least squares line through its columns'
+    planes; it keeps the direction ``d`` of its cluster when the two differ by less than
+    ``snap_deg`` or not significantly (:data:`SNAP_CONFIDENCE`).
+
+    Returns
+    -------
+    piece_of_col, normals
+        ``(m,)`` piece of every column (-1 outside kept runs) and the plan normal of each piece.
+    """
+    piece_of_col = np.full(len(cols), -1, dtype=np.int64)
+    normals: list[FloatArray] = []
+    snap = np.radians(params.snap_deg)
+    kept = np.flatnonzero(keep_run[np.maximum(run, 0)] & (run >= 0))
+    if not len(kept):
+        return piece_of_col, normals
+    order = kept[np.lexsort((cols.bin[kept], run[kept]))]
+    bounds = np.flatnonzero(np.r_[True, run[order][1:] != run[order][:-1], True])
+    for a0, b0 in zip(bounds[:-1], bounds[1:]):
+        c = order[a0:b0]
+        u, v, w = cols.u[c], cols.offset[c], cols.area[c]
+        chords = _chords(u, v, w, cols.u_lo[c], cols.u_hi[c], params.box_depth_m / 2, params.min_wall_length_m)
+        own = [_own_normal(u[a:b], v[a:b], w[a:b], d, snap) for a, b in chords]
+        # a step between two pieces that both keep the cluster's direction is no corner: it is
+        # as often a curtain, a shelf's side or a radiator the segment chained through as a jog
+        # of the wall, and the pieces stay one plane in the cluster's direction through their
+        # median (as in the paper)
+        i = 0
+        while i + 1 < len(chords):
+            if own[i] is None and own[i + 1] is None:
+                chords[i : i + 2] = [(chords[i][0], chords[i + 1][1])]
+                del own[i + 1]
+            else:
+                i += 1
+        for (a, b), n in zip(chords, own):
+            normals.append(d if n is None else n)
+            piece_of_col[c[a:b]] = len(normals) - 1
+    return piece_of_col, normals
+
+
+def _segment_distance(s0: FloatArray, e0: FloatArray, s1: FloatArray, e1: FloatArray) -> FloatArray:
+    """``(n, m)`` plan distances between the segments ``s0-e0`` (n) and ``s1-e1`` (m)."""
+
+    def point_seg(p, a, b):  # (n, 2) points to (m,) segments
+        d = b - a
+        dd = np.maximum(np.einsum("ij,ij->i", d, d), 1e-24)
+        rel = p[:, None, :] - a[None, :, :]
+        k = np.clip(np.einsum("nmk,mk->nm", rel, d) / dd, 0.0, 1.0)
+        return np.linalg.norm(rel - k[..., None] * d[None], axis=2)
+
+    out = np.minimum.reduce([point_seg(s0, s1, e1), point_seg(e0, s1, e1), point_seg(s1, s0, e0).T, point_seg(e1, s0, e0).T])
+    # crossing segments touch although no end is near the other
+    cross = lambda o, p, q: (p[..., 0] - o[..., 0]) * (q[..., 1] - o[..., 1]) - (p[..., 1] - o[..., 1]) * (q[..., 0] - o[..., 0])  # noqa: E731
+    A, B, C, D = s0[:, None], e0[:, None], s1[None], e1[None]
+    hit = (np.sign(cross(A, B, C)) * np.sign(cross(A, B, D)) < 0) & (np.sign(cross(C, D, A)) * np.sign(cross(C, D, B)) < 0)
+    return np.where(hit, 0.0, out)
+
+
+def _free_standing(rows: list[dict], raster: StoryRaster, floor: float, params: WallParams) -> np.ndarray:
+    """Rows of one story that are free-standing objects, not walls: pieces that, with the
+    walls they connect to (within :data:`CONNECT_M`), span no more than ``free_standing_m``
+    (a panel, a pillar, a desk's screen: the network of a room's walls is larger), that have
+    the floor scanned right behind them along :data:`FLOOR_BEHIND_SHARE` of their length (the
+    scanner went round them; behind a wall lies its other face, another room, or nothing seen)
+    and that are seen down to the floor (within :data:`FLOOR_CLEARANCE_M`: what the scanner went
+    round it saw to its foot, where a wall seen only above a desk or a sill has its foot hidden
+    by what stands against it). A short return at a corner or a door jamb's stub is connected
+    to a longer wall and stays."""
+    n = len(rows)
+    out = np.zeros(n, dtype=bool)
+    if not n:
+        return out
+    ends = [_ends(r) for r in rows]
+    s, e = np.array([a for a, _ in ends]), np.array([b for _, b in ends])
+    near = _segment_distance(s, e, s, e) <= CONNECT_M
+    # connected components (labels propagated to the smallest index)
+    comp = np.arange(n)
+    for _ in range(n):
+        new = np.min(np.where(near, comp[None, :], n), axis=1)
+        new = np.minimum(new, comp)
+        if np.array_equal(new, comp):
+            break
+        comp = new
+    normals = np.array([r["normal"] for r in rows])
+    behind = floor_behind(raster, s, e, normals, params.max_wall_thickness_m, params.context_m)
+    length = np.linalg.norm(e - s, axis=1)
+    for c in np.unique(comp):
+        members = np.flatnonzero(comp == c)
+        pts = np.r_[s[members], e[members]]
+        span = float(np.max(np.linalg.norm(pts[:, None] - pts[None], axis=2)))
+        share = float((behind[members] * length[members]).sum() / max(length[members].sum(), 1e-12))
+        foot = all(rows[i]["bottom"] <= floor + FLOOR_CLEARANCE_M for i in members)
+        out[members] = span <= params.free_standing_m and share >= FLOOR_BEHIND_SHARE and foot
     return out
 
 
@@ -259,7 +533,9 @@ def find_flat_walls(mesh: Mesh, orientation: Orientation, params: WallParams | N
     of a wall become walls (see :mod:`meshplan.walls.evidence`): a top that reaches the ceiling
     or, where none was scanned near it, the top of what was scanned around it; a height above
     any work surface; no counter or desk top attached behind its top edge; no surface facing
-    the same way behind it.
+    the same way behind it. Each run is cut into straight pieces, each drawn in its own
+    direction (not its cluster's, unless within ``snap_deg``); pieces of one plane are merged,
+    and free-standing objects (short, connected to no wall, floor behind them) dropped.
 
     Parameters
     ----------
@@ -271,7 +547,8 @@ def find_flat_walls(mesh: Mesh, orientation: Orientation, params: WallParams | N
         Wall parameters; the paper's defaults when omitted.
     """
     params = params or WallParams()
-    dirs = wall_directions(orientation, params.wall_directions)
+    in_stories = orientation.face_story >= 0
+    dirs = wall_directions(orientation, params.wall_directions, mesh.face_normals[in_stories], mesh.face_areas[in_stories], params.facing_tolerance_deg)
     # DBSCAN counts centroids: faces larger than the box (parametric models) are split so that
     # the centroids sample the surface evenly; dense scans are left as they are
     tri, parent = subdivide(mesh.triangles, SPLIT_SHARE * params.box_length_m)
@@ -288,7 +565,6 @@ def find_flat_walls(mesh: Mesh, orientation: Orientation, params: WallParams | N
     rows: list[dict] = []
     below: list[dict] = []  # walls of the story below that reach its ceiling
     for story in orientation.stories:
-        first = len(rows)
         ceiling = story.ceiling if story.ceiling_found else None
         # without a scanned ceiling the assumed one bounds nothing: the story's faces go up to
         # its top boundary (the next story, or the top of the scan)
@@ -297,6 +573,7 @@ def find_flat_walls(mesh: Mesh, orientation: Orientation, params: WallParams | N
         raster = story_raster(tri[story_faces], normals[story_faces], story.floor, ceiling)
         height = params.box_height_m or story.height
         half = np.array([params.box_length_m / 2, params.box_depth_m / 2, height / 2])
+        found: list[dict] = []
         for d_index, d in enumerate(dirs):
             n3 = np.array([d[0], 0.0, d[1]])
             t3 = np.array([-d[1], 0.0, d[0]])
@@ -313,36 +590,53 @@ def find_flat_walls(mesh: Mesh, orientation: Orientation, params: WallParams | N
             lab, fidx = labels[ok], idx[ok]
             verts = tri[fidx]  # (n, 3, 3)
             vu = verts @ t3
-            offset = _group_weighted_median(lab, pts[ok, 1], areas[fidx], k)
+            offset = group_weighted_median(lab, pts[ok, 1], areas[fidx], k)
             u_lo, u_hi = _group_minmax(np.repeat(lab, 3), vu.reshape(-1), k)
-            cols = columns(lab, pts[ok, 0], vu, verts[..., 1], offset, width)
+            cols = columns(lab, pts[ok, 0], vu, verts[..., 1], pts[ok, 1], areas[fidx], width)
             wall, neutral = _wall_columns(cols, raster, d, story.floor, ceiling, width, params)
-            wall |= _continues(below, d_index, offset, u_lo, u_hi, params)[cols.segment]
+            wall |= _continues(below, d_index, d, offset, u_lo, u_hi, params)[cols.segment]
             run = runs(cols, wall, neutral)
             n_runs = int(run.max()) + 1
-            # sub-segments: each run of wall columns, then the rest of each DBSCAN segment
-            sub_of_col = np.where(run >= 0, run, n_runs + cols.segment)
+            # the runs long enough and coming near the floor
+            run_face = run[cols.face_column]
+            r_ok = run_face >= 0
+            r_lo, r_hi = _group_minmax(np.repeat(run_face[r_ok], 3), vu[r_ok].reshape(-1), max(n_runs, 1))
+            r_bottom, _ = _group_minmax(np.repeat(run_face[r_ok], 3), verts[r_ok][..., 1].reshape(-1), max(n_runs, 1))
+            keep_run = (r_hi - r_lo >= params.min_wall_length_m) & (r_bottom <= story.floor + params.floor_reach_m)
+            piece_of_col, piece_normals = _pieces(cols, run, keep_run, d, params)
+            n_pieces = len(piece_normals)
+            # sub-segments: each straight piece of a kept run, then the other runs, then the
+            # rest of each DBSCAN segment
+            sub_of_col = np.where(piece_of_col >= 0, piece_of_col, np.where(run >= 0, n_pieces + run, n_pieces + n_runs + cols.segment))
             sub = sub_of_col[cols.face_column]
-            m = n_runs + k
-            p_lo, p_hi = _group_minmax(np.repeat(sub, 3), vu.reshape(-1), m)
+            m = n_pieces + n_runs + k
+            # each piece in its own frame: along its tangent and across its normal
+            pn = np.array(piece_normals).reshape(-1, 2)
+            own = sub < n_pieces
+            fn = np.where(own[:, None], pn[np.minimum(sub, max(n_pieces - 1, 0))] if n_pieces else d, d)
+            ft = np.c_[-fn[:, 1], fn[:, 0]]
+            along = np.einsum("fkj,fj->fk", verts[..., [0, 2]], ft)  # (n, 3) corners along
+            across = np.einsum("fj,fj->f", centroids[fidx][:, [0, 2]], fn)
+            p_lo, p_hi = _group_minmax(np.repeat(sub, 3), along.reshape(-1), m)
             y_lo, y_hi = _group_minmax(np.repeat(sub, 3), verts[..., 1].reshape(-1), m)
-            p_off = _group_weighted_median(sub, pts[ok, 1], areas[fidx], m)
+            p_off = group_weighted_median(sub, across, areas[fidx], m)
             # support: the faces of the mesh (not their pieces) in each sub-segment
             pairs = np.unique(sub * np.int64(mesh.n_faces) + parent[fidx])
             support = np.bincount(pairs // mesh.n_faces, minlength=m)
             area = np.bincount(sub, weights=areas[fidx], minlength=m)
             present = np.bincount(sub, minlength=m) > 0
             keep = np.zeros(m, dtype=bool)
-            keep[:n_runs] = (p_hi[:n_runs] - p_lo[:n_runs] >= params.min_wall_length_m) & (y_lo[:n_runs] <= story.floor + params.floor_reach_m)
+            keep[:n_pieces] = True
             # ids of the sub-segments that exist, in order
             ids = np.cumsum(present) - 1 + len(seg_story)
             piece_segment[fidx] = ids[sub]
             seg_story.extend([story.index] * int(present.sum()))
             seg_kept.extend(keep[present].tolist())
-            found = [
+            found.extend(
                 {
                     "story": story.index,
                     "direction": d_index,
+                    "normal": (float(pn[j, 0]), float(pn[j, 1])),
                     "offset": float(p_off[j]),
                     "u_min": float(p_lo[j]),
                     "u_max": float(p_hi[j]),
@@ -352,10 +646,17 @@ def find_flat_walls(mesh: Mesh, orientation: Orientation, params: WallParams | N
                     "area": float(area[j]),
                     "segments": [int(ids[j])],
                 }
-                for j in np.flatnonzero(keep)
-            ]
-            rows.extend(_merge(found, params.box_depth_m / 2, params.merge_gap_m))
-        below = [r for r in rows[first:] if r["top"] >= story.ceiling - params.ceiling_reach_m]
+                for j in range(n_pieces)
+                if present[j]
+            )
+        found = _merge(found, params.box_depth_m / 2, params.merge_gap_m)
+        free = _free_standing(found, raster, story.floor, params)
+        for r in (r for r, f in zip(found, free) if f):
+            for sid in r["segments"]:
+                seg_kept[sid] = False
+        found = [r for r, f in zip(found, free) if not f]
+        rows.extend(found)
+        below = [r for r in found if r["top"] >= story.ceiling - params.ceiling_reach_m]
     rows.sort(key=lambda r: (r["story"], r["direction"], r["offset"], r["u_min"]))
     segment_wall = np.full(len(seg_story), -1, dtype=np.int64)
     for w, r in enumerate(rows):
@@ -368,7 +669,7 @@ def find_flat_walls(mesh: Mesh, orientation: Orientation, params: WallParams | N
     return FlatWalls(
         story=col("story", np.int64),
         direction=col("direction", np.int64),
-        normal=dirs[col("direction", np.int64)] if rows else np.zeros((0, 2)),
+        normal=np.array([r["normal"] for r in rows], dtype=np.float64).reshape(-1, 2),
         offset=col("offset"),
         u_min=col("u_min"),
         u_max=col("u_max"),
@@ -404,6 +705,6 @@ def _wall_columns(
     above_work = top > floor + params.max_work_surface_m
     seen = cols.top - cols.bottom >= MIN_COLUMN_SPAN_SHARE * (target - floor)
     furniture_top = top_attached(raster, normal, cols, width) >= MIN_TOP_SHARE
-    hidden = hidden_behind(cols, params.context_m, params.max_wall_thickness_m)
+    hidden = hidden_behind(cols, params.context_m, params.max_wall_thickness_m, params.max_work_surface_m)
     plausible = reaches & above_work & ~furniture_top & ~hidden
     return plausible & seen, plausible & ~seen

@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass
 from typing import ClassVar
 
+from ..units import FOOT_M, INCH_M
 from ..validation import (
     MAX_LENGTH_M,
     Constraint,
@@ -14,9 +15,6 @@ from ..validation import (
     Real,
     validated,
 )
-
-FOOT_M = 0.3048
-INCH_M = 0.0254
 
 #: Which wall directions the DBSCAN runs on.
 DIRECTION_MODES = ("auto", "principal", "all")
@@ -95,6 +93,18 @@ class WallParams:
         reach (the ceiling near it, or, without one, the top of what was scanned around it) and
         for surfaces behind it (the wall behind a counter, a desk or a wardrobe): deeper than
         kitchen counters (0.6 m) and desks (0.8 m), shallower than a room.
+    snap_deg
+        A wall piece whose own fitted direction is within this angle of its cluster's is drawn
+        along the cluster. Walls built square are square to a fraction of a degree, and the
+        direction of a few metres of scanned wall is uncertain by about as much; beyond it the
+        difference is real (a wall built at an angle, or the drift of a headset bending the
+        scan by 3-8 degrees), and the wall is drawn at its own angle, so that it stays on the
+        mesh along its whole length.
+    free_standing_m
+        Largest extent of a free-standing object taken for walls: a piece of wall that, with
+        the walls it connects to, spans no more than this and has the floor scanned right
+        behind it is a panel, a pillar or a screen (0.3-1 m), not a wall. A room's walls span
+        more; a short return or a door jamb's stub connects to them.
     """
 
     _parameter_constraints: ClassVar[dict[str, Constraint]] = {
@@ -112,6 +122,8 @@ class WallParams:
         "default_wall_thickness_m": _LENGTH,
         "max_work_surface_m": _GAP,
         "context_m": _GAP,
+        "snap_deg": Real(0.0, 45.0, why="an angle between two directions of walls; 45 degrees snaps every wall to the nearest cluster"),
+        "free_standing_m": _GAP,
     }
 
     box_length_m: float = 1.5 * FOOT_M
@@ -128,6 +140,8 @@ class WallParams:
     default_wall_thickness_m: float = 0.15
     max_work_surface_m: float = 1.2
     context_m: float = 1.0
+    snap_deg: float = 1.0
+    free_standing_m: float = 1.2
 
     def to_dict(self) -> dict:
         return asdict(self)
