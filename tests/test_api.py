@@ -53,7 +53,7 @@ class _Stop(MeshplanError):
 def test_the_cli_is_a_thin_layer_over_meshplan_run(tmp_path, monkeypatch, capsys):
     """Every option of ``meshplan run`` reaches :func:`meshplan.pipeline.run` as the keyword
     parameter of the same meaning, which ``meshplan.run`` accepts as well."""
-    import meshplan.pipeline
+    import meshplan.api
 
     calls: list[tuple[tuple, dict]] = []
 
@@ -61,7 +61,7 @@ def test_the_cli_is_a_thin_layer_over_meshplan_run(tmp_path, monkeypatch, capsys
         calls.append((args, kwargs))
         raise _Stop("stopped by the test")
 
-    monkeypatch.setattr(meshplan.pipeline, "run", fake_run)
+    monkeypatch.setattr(meshplan.api, "run", fake_run)
     argv = [
         "run", "scan.ply", "-o", str(tmp_path / "out"), "-a", "ann.json", "--force",
         "--units", "cm", "--up", "+z", "--gravity", "bbox", "--slices", "17", "--opacity", "0.3",

@@ -322,7 +322,7 @@ import hashlib, json, os, pathlib, shutil, signal, sys, traceback
 
 import meshplan.export as export
 from meshplan.io import atomic
-from meshplan.pipeline import run
+from meshplan.api import run
 
 scan, out = sys.argv[1], pathlib.Path(sys.argv[2])
 old, new = run(scan, slices=10), run(scan, slices=37)

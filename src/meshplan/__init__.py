@@ -12,21 +12,21 @@ from ._version import __version__
 from .errors import MeshplanError
 
 if TYPE_CHECKING:  # pragma: no cover
-    from .pipeline import Result
+    from .result import Result
 
 __all__ = ["MeshplanError", "Result", "__version__", "run"]
 
 
 def run(scan: Any, **options: Any) -> Result:
-    """Turn a scanned mesh into an oriented model and floor plans; see :func:`meshplan.pipeline.run`."""
-    from .pipeline import run as _run
+    """Turn a scanned mesh into an oriented model and floor plans; see :func:`meshplan.api.run`."""
+    from .api import run as _run
 
     return _run(scan, **options)
 
 
 def __getattr__(name: str) -> Any:
     if name == "Result":
-        from .pipeline import Result
+        from .result import Result
 
         return Result
     raise AttributeError(name)

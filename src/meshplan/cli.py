@@ -11,15 +11,37 @@ from __future__ import annotations
 import json
 import logging
 import os
+import signal
 import sys
+import threading
 from enum import Enum
 from pathlib import Path
 from typing import Any, Optional
 
-import typer
 
-from . import __version__
-from .errors import MeshplanError, ParameterError
+def _interrupted_while_starting(signum: int, frame: Any) -> None:
+    """Ctrl-C while this module loads (typer, and the options' defaults, which import numpy and
+    scipy: about a second), before :func:`main` can catch it: the same one line, no traceback."""
+    sys.stderr.write("error: interrupted; nothing was written\n")
+    sys.stderr.flush()
+    os._exit(130)
+
+
+#: Loading as the ``meshplan`` program (the console script or ``python -m meshplan``) with
+#: Python's own Ctrl-C handler; a library importing this module keeps its handler.
+_STARTING = (
+    threading.current_thread() is threading.main_thread()
+    and signal.getsignal(signal.SIGINT) is signal.default_int_handler
+    and bool(sys.argv[:1])
+    and (Path(sys.argv[0]).name == "meshplan" or Path(sys.argv[0]).parts[-2:] == ("meshplan", "__main__.py"))
+)
+if _STARTING:
+    signal.signal(signal.SIGINT, _interrupted_while_starting)
+
+import typer  # noqa: E402 - after the handler above: this import takes a while
+
+from . import __version__  # noqa: E402
+from .errors import MeshplanError, ParameterError  # noqa: E402
 
 app = typer.Typer(
     name="meshplan",
@@ -148,8 +170,7 @@ def run(
     verbose: int = typer.Option(0, "--verbose", "-v", count=True, help="Debug logging (-vv: also the libraries')."),
 ) -> None:
     """Orient a scan, split it into stories and draw its floor plans."""
-    from .pipeline import default_output_dir
-    from .pipeline import run as run_pipeline
+    from . import api
 
     _setup_logging(verbose, quiet)
     params = _options(
@@ -176,19 +197,20 @@ def run(
         max_faces=max_faces,
         ifc=ifc or None,
     )
-    out = output if output is not None else default_output_dir(scan)
+    out = output if output is not None else api.default_output_dir(scan)
     from .progress import StageProgress
 
     with StageProgress(enabled=not quiet and not as_json) as progress:
-        result = run_pipeline(scan, annotations=annotations, output=out, force=force, progress=progress.update, **params)
-    for w in result.warnings:
-        logging.getLogger("meshplan").warning(w)
+        result = api.run(scan, annotations=annotations, output=out, force=force, progress=progress.update, **params)
     if as_json:
+        # the summary on stdout holds them; stderr says them too (as log warnings)
+        for w in result.warnings:
+            logging.getLogger("meshplan").warning(w)
         typer.echo(json.dumps(result.summary(), indent=2))
     elif not quiet:
         from .progress import print_summary
 
-        print_summary(result)
+        print_summary(result)  # with the warnings, once
 
 
 @app.command()
@@ -302,7 +324,8 @@ def batch(
     succeeded, 1 when some failed (see summary.csv), 2 for a usage error (no scans found, bad
     option, unwritable output, no Dask scheduler).
     """
-    from .batch import BatchInterrupted, BatchProgress, ScansFailed, find_annotations, find_scans, print_batch_summary, run_batch
+    from .batch import BatchInterrupted, ScansFailed, find_annotations, find_scans, run_batch
+    from .progress import BatchProgress, print_batch_summary
 
     _setup_logging(verbose, quiet)
     params = _options(
@@ -412,6 +435,9 @@ def entry() -> None:  # pragma: no cover - exercised through the console script 
             pass
     os._exit(status)
 
+
+if _STARTING:  # loaded: from here on main() reports a Ctrl-C
+    signal.signal(signal.SIGINT, signal.default_int_handler)
 
 if __name__ == "__main__":  # pragma: no cover
     entry()

@@ -39,6 +39,7 @@ from typing import Any
 import numpy as np
 
 from .errors import InputError
+from .units import UNITS_M as _UNITS_M
 
 #: ``format`` of the report made by :func:`evaluate_real`.
 REAL_REPORT_FORMAT = "meshplan-real-evaluation/1"
@@ -64,7 +65,6 @@ _EPS_M = 1e-9
 
 #: Metres per unit of ``plan.input.units`` (as meshplan.io.UNITS_M, repeated here so that
 #: scoring does not import the mesh readers).
-_UNITS_M = {"m": 1.0, "cm": 0.01, "mm": 0.001, "ft": 0.3048, "in": 0.0254}
 
 _HINT = "give a plan.json written by meshplan run and a <scan>.truth.json"
 

@@ -1,122 +1,45 @@
-"""The whole job, from a scan on disk to plans: :func:`run` (also exposed as ``meshplan.run``).
+"""The computing stages, from a loaded scan to a :class:`~meshplan.result.Result`: :func:`compute`.
 
-The command line is a thin layer over :func:`run`. Stages only compute; files are written at the
-very end, all at once, through :mod:`meshplan.export` (a failure leaves nothing behind).
+Stages only compute; reading the scan, drawing and writing the files are the run API's
+(:func:`meshplan.api.run`, also ``meshplan.run``), which calls :func:`compute` in between.
 """
 
 from __future__ import annotations
 
 import logging
-import os
-import time
-from collections.abc import Callable
-from contextlib import contextmanager
-from dataclasses import dataclass, field, replace
-from pathlib import Path
-from typing import Any
 
 import numpy as np
 
-from .errors import GeometryError, MeshplanError
+from .errors import GeometryError
 from .geometry import Annotations, Mesh
-from .io import LoadStats, load_annotations, load_mesh
+from .io import LoadStats
 from .options import RunOptions
-from .orient import Orientation, Story, assign_faces, orient
-from .plan import DraftingPlan, Openings, PenAndInkPlan, Room, drafting, find_openings, find_rooms, pen_and_ink
-from .walls import FlatWalls, PhysicalWall, find_flat_walls, physical_walls
+from .orient import assign_faces
+from .plan import drafting, find_openings, find_rooms, pen_and_ink
+from .result import PAPER_FACES, PAPER_TIMINGS_S, STAGES, Progress, Result, StoryPlans, _Timer
+from .updown import WEAK_SIGN_EVIDENCE, settle_up
+from .updown import up_by_doors as _up_by_doors
+from .updown import up_in_doubt as _up_in_doubt
+from .walls import find_flat_walls, physical_walls
 
-log = logging.getLogger("meshplan")
+log = logging.getLogger(__name__)
 
-#: Stages reported to progress callbacks, in order.
-STAGES = ("load", "orient", "walls", "rooms", "slice_draw", "write")
-
-#: The paper's Table 1 timings (seconds) for its residential building B2 (285,840 faces).
-PAPER_TIMINGS_S = {"orient": 24.08, "walls": 81.5, "slice_draw": 0.9}
-PAPER_FACES = 285_840
-
-Progress = Callable[[str, str], None]  # (stage, "start" | "done")
-
-
-@dataclass(frozen=True, eq=False)
-class StoryPlans:
-    """Everything drawn for one story."""
-
-    story: Story
-    pen_and_ink: PenAndInkPlan
-    drafting: DraftingPlan
-    annotations: Annotations  # the annotations on this story (plan frame)
-
-
-@dataclass(eq=False)
-class Result:
-    """What :func:`run` found and made.
-
-    Attributes
-    ----------
-    input
-        What was read from the scan and what was dropped.
-    options
-        Every parameter used.
-    orientation
-        Transform, levels, wall directions and stories.
-    mesh
-        The scan in the plan frame, normals facing into the rooms.
-    annotations
-        The annotations in the plan frame.
-    walls
-        The flat walls of every story.
-    rooms, openings
-        Rooms of every story; doors and windows in the walls.
-    physical_walls
-        The wall faces paired into walls with a thickness.
-    stories
-        The plans of each story.
-    timings
-        Seconds per stage, with ``total``.
-    output_dir
-        Where the files were written (``None`` when nothing was written).
-    files
-        Names of the files written, in order.
-    warnings
-        Things the user should know.
-    """
-
-    input: LoadStats
-    options: RunOptions
-    orientation: Orientation
-    mesh: Mesh
-    annotations: Annotations
-    walls: FlatWalls
-    rooms: tuple[Room, ...]
-    openings: Openings
-    physical_walls: tuple[PhysicalWall, ...]
-    stories: tuple[StoryPlans, ...]
-    timings: dict[str, float] = field(default_factory=dict)
-    output_dir: Path | None = None
-    files: tuple[str, ...] = ()
-    warnings: tuple[str, ...] = ()
-    annotation_story: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
-
-    @property
-    def transform(self) -> np.ndarray:
-        """4x4 rigid transform from input coordinates to the plan frame."""
-        return self.orientation.transform
-
-    def summary(self) -> dict[str, Any]:
-        """A short JSON-ready summary (what ``meshplan run --json`` prints)."""
-        return {
-            "scan": self.input.path,
-            "output": str(self.output_dir) if self.output_dir else None,
-            "faces": self.input.faces,
-            "stories": [s.story.to_dict(3) for s in self.stories],
-            "walls": len(self.walls),
-            "rooms": [{"label": r.label, "story": r.story, "area": round(r.area, 2)} for r in self.rooms],
-            "doors": sum(k == "door" for k in self.openings.kind),
-            "windows": sum(k == "window" for k in self.openings.kind),
-            "annotations": len(self.annotations),
-            "warnings": list(self.warnings),
-            "timings": {k: round(v, 4) for k, v in self.timings.items()},
-        }
+# re-exported: these lived here before meshplan.result and meshplan.updown
+__all__ = [
+    "FLAT_SHARE",
+    "PAPER_FACES",
+    "PAPER_TIMINGS_S",
+    "STAGES",
+    "WEAK_SIGN_EVIDENCE",
+    "Progress",
+    "Result",
+    "StoryPlans",
+    "_Timer",
+    "_up_by_doors",
+    "_up_in_doubt",
+    "check_not_flat",
+    "compute",
+]
 
 
 #: Share of the area-weighted normals along one direction above which a scan holds no room.
@@ -147,65 +70,6 @@ def check_not_flat(mesh: Mesh) -> None:
         )
 
 
-class _Timer:
-    def __init__(self, progress: Progress | None) -> None:
-        self.timings: dict[str, float] = {}
-        self.progress = progress
-
-    @contextmanager
-    def stage(self, name: str):
-        if self.progress:
-            self.progress(name, "start")
-        t0 = time.perf_counter()
-        try:
-            yield
-        finally:
-            self.timings[name] = self.timings.get(name, 0.0) + time.perf_counter() - t0
-        log.debug("stage %s: %.3f s", name, self.timings[name])
-        if self.progress:
-            self.progress(name, "done")
-
-
-#: Below this evidence (a log-ratio, see :func:`meshplan.orient.gravity.sign_evidence`) the
-#: scan shows too little furniture to tell up from down (furnished synthetic scans give 1.2 and
-#: more, real scans 0.3-2.3, empty buildings near 0, or below it from their door heads), and the
-#: doors decide.
-WEAK_SIGN_EVIDENCE = 1.0
-
-
-def _up_in_doubt(orientation: Orientation, options: RunOptions) -> bool:
-    g = orientation.gravity
-    return options.orient.up == "auto" and g.method == "kmeans" and abs(g.sign_evidence) < WEAK_SIGN_EVIDENCE
-
-
-def _up_by_doors(mesh: Mesh, orientation: Orientation, plan_mesh: Mesh, options: RunOptions):
-    """Doors reach down to the floor: the way up that shows clearly more doors is up.
-
-    Upside down, a door is a gap hanging from the ceiling, which no door detector takes for a
-    door; every room has one, furnished or not. Returns the orientation and plan mesh kept and
-    their walls and openings (computed here, so that they are not computed again).
-    """
-    def doors(o: Orientation, m: Mesh):
-        walls = find_flat_walls(m, o, options.walls)
-        openings = find_openings(m, o, walls, options.plan)
-        return sum(k == "door" for k in openings.kind), (walls, openings)
-
-    n_here, found = doors(orientation, plan_mesh)
-    try:
-        other = orient(mesh, options.orient, up_hint=-orientation.gravity.up)
-    except MeshplanError:  # upside down there is no floor at all
-        return orientation, plan_mesh, found
-    other_mesh = mesh.transformed(other.transform).with_flipped(other.flipped)
-    n_other, other_found = doors(other, other_mesh)
-    log.debug("up in doubt (sign evidence %.2f): %d doors this way up, %d the other", orientation.gravity.sign_evidence, n_here, n_other)
-    by_doors = lambda o: replace(o, gravity=replace(o.gravity, sign_by="doors"))  # noqa: E731
-    if n_other > 2 * n_here:
-        return by_doors(other), other_mesh, other_found
-    if n_here > 2 * n_other:
-        return by_doors(orientation), plan_mesh, found
-    return orientation, plan_mesh, found
-
-
 def compute(
     mesh: Mesh,
     stats: LoadStats,
@@ -228,15 +92,13 @@ def compute(
     with timer.stage("orient"):
         check_not_flat(mesh)
         orientation, plausibility_warnings = orient_plausibly(mesh, options.input.units, options.orient, units_explicit)
-        plan_mesh = mesh.transformed(orientation.transform).with_flipped(orientation.flipped)
-        found = None
-        if _up_in_doubt(orientation, options):
-            orientation, plan_mesh, found = _up_by_doors(mesh, orientation, plan_mesh, options)
+        upright = settle_up(mesh, orientation, options)  # the doors decide when furniture cannot
+        orientation, plan_mesh = upright.orientation, upright.mesh
         plan_annotations = annotations.transformed(orientation.transform)
     with timer.stage("walls"):
-        walls = found[0] if found else find_flat_walls(plan_mesh, orientation, options.walls)
+        walls = upright.walls if upright.walls is not None else find_flat_walls(plan_mesh, orientation, options.walls)
     with timer.stage("rooms"):
-        openings = found[1] if found else find_openings(plan_mesh, orientation, walls, options.plan)
+        openings = upright.openings if upright.openings is not None else find_openings(plan_mesh, orientation, walls, options.plan)
         rooms = find_rooms(plan_mesh, orientation, walls, options.plan, options.orient.slab_tolerance_m)
         physical = physical_walls(walls, options.walls.max_wall_thickness_m, options.walls.default_wall_thickness_m)
     with timer.stage("slice_draw"):
@@ -277,84 +139,3 @@ def compute(
         warnings=tuple(warnings),
         annotation_story=ann_story,
     )
-
-
-def default_output_dir(scan: str | os.PathLike) -> Path:
-    """``./meshplan-out/<scan name>``."""
-    return Path("meshplan-out") / Path(scan).stem
-
-
-def run(
-    scan: str | os.PathLike,
-    *,
-    annotations: str | os.PathLike | None = None,
-    output: str | os.PathLike | None = None,
-    force: bool = False,
-    progress: Progress | None = None,
-    options: RunOptions | None = None,
-    **params: Any,
-) -> Result:
-    """Turn a scanned mesh into an oriented model and floor plans.
-
-    Parameters
-    ----------
-    scan
-        OBJ, PLY, GLB/glTF, STL or OFF file.
-    annotations
-        Optional annotation file (JSON, input coordinates).
-    output
-        Directory to write the results to; nothing is written when ``None``. It must not exist
-        unless ``force``.
-    force
-        Replace an existing output directory (atomically).
-    progress
-        Called with ``(stage, "start" | "done")``.
-    options
-        All parameters at once; or give them as keywords (``units="cm"``, ``up="+z"``,
-        ``slices=50``, ... the same names as the command-line options).
-
-    Returns
-    -------
-    Result
-
-    Raises
-    ------
-    MeshplanError
-        For any problem with the input or the options, with a one-line explanation.
-
-    Examples
-    --------
-    >>> import meshplan
-    >>> result = meshplan.run("scan.obj", output="out", units="cm")  # doctest: +SKIP
-    >>> [s.floor for s in result.orientation.stories]  # doctest: +SKIP
-    [0.0]
-    """
-    from contextlib import nullcontext
-
-    from .export import RenderPool, _processes, write_results
-    from .io import check_output_dir
-
-    if options is None:
-        options = RunOptions.from_kwargs(**params)
-    elif params:
-        raise TypeError("give either options or keyword parameters, not both")
-    if output is not None:
-        # the scan and the annotations must survive a --force that names their directory
-        check_output_dir(output, force, protect=(scan, annotations))
-    timer = _Timer(progress)
-    t0 = time.perf_counter()
-    # the drawing workers start now and get ready while the stages compute
-    with RenderPool(_processes(options.render)) if output is not None else nullcontext() as pool:
-        with timer.stage("load"):
-            loaded = load_mesh(scan, options.input.units, options.input.max_faces)
-            ann = load_annotations(annotations, loaded.stats.scale_to_m) if annotations is not None else Annotations()
-        # with keyword parameters, an absent --units comes as None (dropped by from_kwargs)
-        explicit = params.get("units") is not None if "units" in params else None
-        result = compute(loaded.mesh, loaded.stats, ann, options, timer, units_explicit=explicit)
-        if loaded.warnings:  # the reader's (float32 precision) first, before the stages'
-            result.warnings = tuple(loaded.warnings) + tuple(result.warnings)
-        if output is not None:
-            write_results(result, Path(output), force=force, timer=timer, started=t0, pool=pool)
-        else:
-            result.timings["total"] = time.perf_counter() - t0
-    return result

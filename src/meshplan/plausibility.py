@@ -42,8 +42,9 @@ from .errors import GeometryError, MeshplanError
 from .geometry import FloatArray, Mesh
 from .io.mesh import UNITS_M
 from .orient import Orientation, OrientParams, orient
+from .units import UNIT_NAMES
 
-log = logging.getLogger("meshplan")
+log = logging.getLogger(__name__)
 
 #: Lowest plausible floor-to-ceiling height (m): building codes ask for 2.1-2.4 m in rooms, and
 #: basements and attics go a little lower; the levels stage pairs floors with ceilings from
@@ -99,7 +100,6 @@ SLAB_MIN_AREA_M2 = 2.0
 #: tilted); ``--up`` names an axis only roughly, to within a few tens of degrees.
 SAME_AXIS_DEG = 45.0
 
-UNIT_NAMES = {"m": "metres", "cm": "centimetres", "mm": "millimetres", "ft": "feet", "in": "inches"}
 
 _AXIS_NAMES = ("x", "y", "z")
 

@@ -1,4 +1,6 @@
-"""Terminal progress and the end-of-run summary (rich, on stderr)."""
+"""Terminal progress and the end-of-run summaries (rich, on stderr): a spinner per stage of a run
+(:class:`StageProgress`) and its summary (:func:`print_summary`); a bar over the scans of a
+batch (:class:`BatchProgress`) and its summary (:func:`print_batch_summary`)."""
 
 from __future__ import annotations
 
@@ -9,7 +11,8 @@ from collections.abc import Iterator
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:  # pragma: no cover
-    from .pipeline import Result
+    from .batch.summary import BatchSummary, ScanRow
+    from .result import Result
 
 STAGE_NAMES = {
     "load": "Reading the scan",
@@ -44,21 +47,26 @@ def logs_above_live_display() -> Iterator[None]:
 
 
 class StageProgress:
-    """A spinner per pipeline stage; does nothing when disabled or not on a terminal."""
+    """A spinner per pipeline stage; does nothing when disabled or not on a terminal.
+
+    A stage may run in several parts (``slice_draw``: the slices computed with the other stages,
+    then the plans drawn while the files are made): its line spins again while each part runs,
+    and its time is the sum of the parts.
+    """
 
     def __init__(self, enabled: bool = True) -> None:
         self.enabled = enabled and sys.stderr.isatty()
         self._progress: Any = None
-        self._tasks: dict[str, int] = {}
+        self._tasks: dict[str, Any] = {}
         self._stack = contextlib.ExitStack()
 
     def __enter__(self) -> StageProgress:
         if self.enabled:
             from rich.console import Console
-            from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
+            from rich.progress import Progress, SpinnerColumn, TextColumn
 
             self._progress = Progress(
-                SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=Console(stderr=True), transient=False
+                SpinnerColumn(), TextColumn("{task.description}"), _StageTimeColumn(), console=Console(stderr=True), transient=False
             )
             self._stack.enter_context(self._progress)
             self._stack.enter_context(logs_above_live_display())
@@ -70,10 +78,37 @@ class StageProgress:
     def update(self, stage: str, event: str) -> None:
         if self._progress is None:
             return
-        if stage not in self._tasks:
-            self._tasks[stage] = self._progress.add_task(STAGE_NAMES.get(stage, stage), total=1)
+        task = self._tasks.get(stage)
+        if task is None:
+            self._tasks[stage] = self._progress.add_task(STAGE_NAMES.get(stage, stage), total=1, before_s=0.0)
+        elif event == "start":  # a stage's next part: running again, its time so far kept
+            done = self._progress.tasks[self._task_index(task)]
+            self._progress.reset(task, total=1, completed=0, before_s=_stage_seconds(done))
         if event == "done":
             self._progress.update(self._tasks[stage], completed=1)
+
+    def _task_index(self, task_id: Any) -> int:
+        return next(i for i, t in enumerate(self._progress.tasks) if t.id == task_id)
+
+
+def _stage_seconds(task: Any) -> float:
+    """Seconds a stage's line has run: its earlier parts and the current one."""
+    elapsed = task.finished_time if task.finished else task.elapsed
+    return float(task.fields.get("before_s", 0.0)) + float(elapsed or 0.0)
+
+
+def _StageTimeColumn() -> Any:
+    """rich's elapsed-time column, counting every part of a stage."""
+    from datetime import timedelta
+
+    from rich.progress import ProgressColumn
+    from rich.text import Text
+
+    class StageTimeColumn(ProgressColumn):
+        def render(self, task: Any) -> Text:
+            return Text(str(timedelta(seconds=int(_stage_seconds(task)))), style="progress.elapsed")
+
+    return StageTimeColumn()
 
 
 def print_summary(result: Result) -> None:
@@ -81,7 +116,7 @@ def print_summary(result: Result) -> None:
     from rich.console import Console
     from rich.table import Table
 
-    from .pipeline import PAPER_TIMINGS_S
+    from .result import PAPER_TIMINGS_S
 
     console = Console(stderr=True)
     st = result.input
@@ -115,3 +150,74 @@ def print_summary(result: Result) -> None:
         console.print(f"[yellow]warning:[/] {w}")
     if result.output_dir:
         console.print(f"{len(result.files)} files in [bold]{result.output_dir}[/]")
+
+
+class BatchProgress:
+    """An overall progress bar, a line per finished scan (rich, stderr); does nothing when
+    disabled or when stderr is not a terminal. Pass its :meth:`update` as ``progress``."""
+
+    def __init__(self, enabled: bool = True) -> None:
+        self.enabled = enabled and sys.stderr.isatty()
+        self._progress: Any = None
+        self._task: Any = None
+        self._stack = contextlib.ExitStack()
+
+    def __enter__(self) -> BatchProgress:
+        if self.enabled:
+            from rich.console import Console
+            from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+
+            self._progress = Progress(
+                TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(), TimeRemainingColumn(),
+                console=Console(stderr=True), refresh_per_second=4,  # keep the parent's CPU for the workers
+            )
+            self._stack.enter_context(self._progress)
+            self._stack.enter_context(logs_above_live_display())  # log lines above the bar, not through it
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        self._stack.__exit__(*exc)
+
+    def update(self, done: int, total: int, row: ScanRow | None) -> None:
+        if self._progress is None:
+            return
+        if self._task is None:
+            self._task = self._progress.add_task("Scans", total=total)
+        if row is not None:
+            from rich.markup import escape
+
+            if row.ok:
+                line = f"[green]ok[/]     {escape(row.scan)} -> {escape(row.output)} ({row.time_s:.1f} s)"
+            else:
+                line = f"[red]failed[/] {escape(row.scan)}: {escape(row.error)}"
+            self._progress.console.print(line, highlight=False)
+        self._progress.update(self._task, completed=done)
+
+
+def print_batch_summary(summary: BatchSummary, console: Any = None) -> None:
+    """The summary table, then one line per failed scan (rich, stderr by default)."""
+    from rich.console import Console
+    from rich.markup import escape
+    from rich.table import Table
+
+    console = console or Console(stderr=True)
+    table = Table(title=f"Batch: {len(summary.rows)} scans", show_edge=False)
+    table.add_column("scan", overflow="fold", ratio=1)
+    table.add_column("status", no_wrap=True)
+    for col in ("stories", "walls", "rooms", "area m²", "faces", "time s"):
+        table.add_column(col, justify="right", no_wrap=True)
+    for r in summary.rows:
+        if r.ok:
+            cells = [str(r.stories), str(r.walls), str(r.rooms), f"{r.area_m2:.2f}", f"{r.faces:,}"]
+            table.add_row(escape(r.scan), "[green]ok[/]", *cells, f"{r.time_s:.1f}")
+        else:
+            table.add_row(escape(r.scan), "[red]failed[/]", "", "", "", "", "", f"{r.time_s:.1f}")
+    console.print(table)
+    for r in summary.failed:
+        console.print(f"[red]failed[/] {escape(r.scan)}: {escape(r.error)}", highlight=False)
+    where = summary.scheduler or (f"{summary.workers} workers" if summary.workers > 1 else "1 process")
+    console.print(
+        f"{len(summary.ok)} ok, {len(summary.failed)} failed in {summary.wall_time_s:.1f} s ({where}); "
+        f"results in {escape(str(summary.output))}/<scan>, summary in summary.csv and summary.json there",
+        highlight=False,
+    )

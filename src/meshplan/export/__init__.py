@@ -7,6 +7,7 @@ import logging
 import os
 import sys
 import time
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -31,11 +32,11 @@ from .planjson import dumps, plan_document, plan_schema
 from .report import report_html
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ..pipeline import Result, _Timer
+    from ..result import Result, _Timer
 
-log = logging.getLogger("meshplan")
+log = logging.getLogger(__name__)
 
-__all__ = ["RenderPool", "dumps", "plan_document", "plan_schema", "render_files", "write_results"]
+__all__ = ["RenderPool", "Written", "dumps", "plan_document", "plan_schema", "render_files", "write_results"]
 
 
 # ---------------------------------------------------------------------------------------------
@@ -153,10 +154,12 @@ def _start_worker(parent: int) -> None:
     ready."""
     import signal
 
-    _die_with_parent(parent)
     # Ctrl-C reaches the whole process group: the run reports it in one line and stops the
-    # workers itself; a worker interrupted mid-job would only print a traceback
+    # workers itself; a worker interrupted mid-job would only print a traceback. The worker
+    # was forked with SIGINT blocked (see RenderPool), so none arrives before it is ignored.
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+    _die_with_parent(parent)
     try:
         os.nice(10)
     except OSError:  # pragma: no cover - not allowed here: run at the same priority
@@ -189,7 +192,7 @@ def _processes(params) -> int:
 class RenderPool:
     """Worker processes that draw the plans, started before there is anything to draw.
 
-    :func:`meshplan.pipeline.run` opens one when a run starts: the workers are forked while the
+    :func:`meshplan.api.run` opens one when a run starts: the workers are forked while the
     process is still small, and each imports matplotlib and draws a first figure (about half a
     second) on the other cores while this process reads the scan and computes the stages. The
     jobs then get what they draw as arguments. With ``processes`` 1 (or off Linux) there are
@@ -200,8 +203,12 @@ class RenderPool:
         self.executor = None
         if processes > 1 and sys.platform.startswith("linux"):
             import multiprocessing
+            import signal
             from concurrent.futures import ProcessPoolExecutor
 
+            # SIGINT blocked while forking: a Ctrl-C then waits for this process (which reports
+            # it in one line) instead of reaching a worker before it ignores it
+            blocked = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
             try:
                 self.executor = ProcessPoolExecutor(
                     processes, mp_context=multiprocessing.get_context("fork"), initializer=_start_worker, initargs=(os.getpid(),)
@@ -210,6 +217,8 @@ class RenderPool:
             except OSError as exc:  # no processes left to fork: draw here
                 log.debug("no drawing workers (%s); drawing in this process", exc)
                 self.executor = None
+            finally:
+                signal.pthread_sigmask(signal.SIG_SETMASK, blocked)
 
     def __enter__(self) -> RenderPool:
         return self
@@ -300,13 +309,34 @@ def render_files(result: Result, timer: _Timer | None = None, pool: RenderPool |
     return dict(sorted(files.items()))
 
 
+@dataclass(frozen=True)
+class Written:
+    """What :func:`write_results` wrote.
+
+    Attributes
+    ----------
+    output_dir
+        The directory, complete.
+    files
+        Names of the files in it, ``plan.json`` first, then in sorted order.
+    timings
+        Seconds per stage, as recorded in ``plan.json``: the result's (or the timer's), with
+        the drawing (``slice_draw``), ``write`` and, given ``started``, ``total``.
+    """
+
+    output_dir: Path
+    files: tuple[str, ...]
+    timings: dict[str, float] = field(default_factory=dict)
+
+
 def write_results(
     result: Result, outdir: Path, force: bool = False, timer: _Timer | None = None, started: float | None = None, pool: RenderPool | None = None
-) -> None:
+) -> Written:
     """Render and write every output of ``result`` into ``outdir`` (atomically), drawing with
     the workers of ``pool`` when given.
 
-    Sets ``result.output_dir``, ``result.files`` and the ``write`` and ``total`` timings.
+    ``result`` is left as it is; the run API makes the final result from what this returns
+    (``dataclasses.replace(result, output_dir=..., files=..., timings=...)``).
     """
     files = render_files(result, timer, pool)
     t0 = time.perf_counter()
@@ -315,9 +345,10 @@ def write_results(
             (tmp / name).write_bytes(data)
         if timer is not None:
             timer.timings["write"] = timer.timings.get("write", 0.0) + time.perf_counter() - t0
-            result.timings = timer.timings
+            timings = dict(timer.timings)
+        else:
+            timings = dict(result.timings)
         if started is not None:
-            result.timings["total"] = time.perf_counter() - started
-        (tmp / "plan.json").write_text(dumps(plan_document(result)), encoding="utf-8")
-    result.output_dir = Path(outdir)
-    result.files = tuple(["plan.json", *files])
+            timings["total"] = time.perf_counter() - started
+        (tmp / "plan.json").write_text(dumps(plan_document(replace(result, timings=timings))), encoding="utf-8")
+    return Written(Path(outdir), ("plan.json", *files), timings)

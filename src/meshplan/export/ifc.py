@@ -21,7 +21,7 @@ from ..errors import MeshplanError
 from ..validation import plain_text
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ..pipeline import Result
+    from ..result import Result
 
 
 def _require_ifcopenshell():

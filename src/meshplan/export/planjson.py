@@ -18,7 +18,7 @@ import numpy as np
 from .._version import __version__
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ..pipeline import Result
+    from ..result import Result
 
 SCHEMA_ID = "https://meshplan.org/schema/plan/1"
 _ND = 6  # digits kept for transforms and directions

@@ -30,16 +30,16 @@ import numpy as np
 
 from ..errors import InputError, ParameterError
 from ..geometry import Mesh
+from ..units import UNITS_M
 from . import readers
 from .readers import REEXPORT, RawMesh, truncated
 
-log = logging.getLogger("meshplan")
+log = logging.getLogger(__name__)
 
 #: File extensions meshplan reads, with the trimesh file type for each.
 MESH_FORMATS = {".obj": "obj", ".ply": "ply", ".glb": "glb", ".gltf": "gltf", ".stl": "stl", ".off": "off"}
 
 #: Length units accepted by ``--units``, in metres.
-UNITS_M = {"m": 1.0, "cm": 0.01, "mm": 0.001, "ft": 0.3048, "in": 0.0254}
 
 #: Peak memory meshplan needs per input face, measured on the 3-million-face benchmark
 #: (about 0.9 kB/face including the plans); used to refuse meshes that cannot fit up front.

@@ -7,6 +7,7 @@ from typing import ClassVar
 
 from ..errors import ParameterError
 from ..sphere import PAPER_TRIM_SCHEDULE_DEG
+from ..units import INCH_M
 from ..validation import (
     MAX_LENGTH_M,
     MAX_SCHEDULE_STEPS,
@@ -26,7 +27,6 @@ UP_CHOICES = ("auto", "+x", "-x", "+y", "-y", "+z", "-z")
 #: Gravity estimators: the paper's Method 2 (spherical k-means, default) and Method 1 (box).
 GRAVITY_METHODS = ("kmeans", "bbox")
 
-INCH_M = 0.0254
 
 #: Smallest bucket of the altitude histogram, in metres: 1 mm is finer than any scanner resolves
 #: (HoloLens 2 and phone LiDAR: about 1 cm), and the histogram has (height span / bucket) bins,

@@ -355,7 +355,7 @@ def _doors(f: _Frame, walls: FlatWalls, floor_cols: np.ndarray, params: PlanPara
     body = g[m : nrow - m]
     if not body.shape[0]:
         return []
-    filled = body.any(axis=0)
+    filled: np.ndarray = np.asarray(body.any(axis=0))
     # empty rows from the floor band up, per column, and whether anything is above them
     first = np.where(filled, np.argmax(body, axis=0), body.shape[0])
     head = f.floor + (m + first) * cell  # where the column's empty space from the floor ends
@@ -384,7 +384,7 @@ def _doors(f: _Frame, walls: FlatWalls, floor_cols: np.ndarray, params: PlanPara
         if not params.door_width_m[0] - 2 * tol <= right - left <= params.door_width_m[1] + 2 * tol:
             continue
         run = slice(lj[0] + 1, rj[0])
-        closed = filled[run] & (head[run] < f.ceiling - params.opening_margin_m)
+        closed = np.asarray(filled[run] & (head[run] < f.ceiling - params.opening_margin_m))
         how = "gap"
         if closed.mean() >= params.opening_edge_straightness:
             heads = head[run][closed]

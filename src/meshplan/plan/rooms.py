@@ -32,11 +32,10 @@ from shapely.geometry import LineString, MultiLineString, Polygon
 
 from ..geometry import FloatArray, Mesh
 from ..orient import Orientation, Story, slab_faces
+from ..units import FOOT_M
 from ..walls import FlatWalls
 from .closure import close_walls, straighten
 from .params import PlanParams
-
-FOOT_M = 0.3048
 
 #: Where the scanned floor closes a room, its outline loses notches and spikes narrower than
 #: twice this (m): the floor's fringe (where the sensor's reach ends, furniture legs, chair

@@ -16,12 +16,11 @@ import shapely
 from shapely.ops import polylabel
 
 from ..geometry import FloatArray
+from ..units import FOOT_M
 from ..walls import FlatWalls
 from ..walls.physical import PhysicalWall, wall_of_face
 from .openings import Openings
 from .rooms import Room
-
-FOOT_M = 0.3048
 
 
 @dataclass(frozen=True)

@@ -13,14 +13,13 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from ..units import FOOT_M, INCH_M
 from ..validation import PLAIN_TEXT_KW, plain_text
 from .params import STANDARD_SCALES, RenderParams
 
 if TYPE_CHECKING:
     from matplotlib.typing import RcKeyType
 
-FOOT_M = 0.3048
-INCH_M = 0.0254
 
 #: Space around the drawing area, in inches: left, right, top, bottom.
 _MARGINS_IN = (0.75, 0.35, 0.6, 0.85)

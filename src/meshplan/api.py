@@ -1,0 +1,104 @@
+"""The whole job, from a scan on disk to plans: :func:`run` (also exposed as ``meshplan.run``).
+
+Read the scan, compute every stage (:func:`meshplan.pipeline.compute`) while the drawing workers
+get ready (:class:`meshplan.export.RenderPool`), then draw and write every file at once,
+atomically (:func:`meshplan.export.write_results`: a failure leaves nothing behind). The
+command line is a thin layer over :func:`run`; this module sits above everything it uses.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import time
+from contextlib import nullcontext
+from dataclasses import replace
+from pathlib import Path
+from typing import Any
+
+from .export import RenderPool, _processes, write_results
+from .geometry import Annotations
+from .io import check_output_dir, load_annotations, load_mesh
+from .options import RunOptions
+from .pipeline import compute
+from .result import Progress, Result, _Timer
+
+log = logging.getLogger(__name__)
+
+__all__ = ["default_output_dir", "run"]
+
+
+def default_output_dir(scan: str | os.PathLike) -> Path:
+    """``./meshplan-out/<scan name>``."""
+    return Path("meshplan-out") / Path(scan).stem
+
+
+def run(
+    scan: str | os.PathLike,
+    *,
+    annotations: str | os.PathLike | None = None,
+    output: str | os.PathLike | None = None,
+    force: bool = False,
+    progress: Progress | None = None,
+    options: RunOptions | None = None,
+    **params: Any,
+) -> Result:
+    """Turn a scanned mesh into an oriented model and floor plans.
+
+    Parameters
+    ----------
+    scan
+        OBJ, PLY, GLB/glTF, STL or OFF file.
+    annotations
+        Optional annotation file (JSON, input coordinates).
+    output
+        Directory to write the results to; nothing is written when ``None``. It must not exist
+        unless ``force``.
+    force
+        Replace an existing output directory (atomically).
+    progress
+        Called with ``(stage, "start" | "done")``; a stage may run in several parts
+        (``slice_draw``: the slices computed, then the plans drawn).
+    options
+        All parameters at once; or give them as keywords (``units="cm"``, ``up="+z"``,
+        ``slices=50``, ... the same names as the command-line options).
+
+    Returns
+    -------
+    Result
+
+    Raises
+    ------
+    MeshplanError
+        For any problem with the input or the options, with a one-line explanation.
+
+    Examples
+    --------
+    >>> import meshplan
+    >>> result = meshplan.run("scan.obj", output="out", units="cm")  # doctest: +SKIP
+    >>> [s.floor for s in result.orientation.stories]  # doctest: +SKIP
+    [0.0]
+    """
+    if options is None:
+        options = RunOptions.from_kwargs(**params)
+    elif params:
+        raise TypeError("give either options or keyword parameters, not both")
+    if output is not None:
+        # the scan and the annotations must survive a --force that names their directory
+        check_output_dir(output, force, protect=(scan, annotations))
+    timer = _Timer(progress)
+    t0 = time.perf_counter()
+    # the drawing workers start now and get ready while the stages compute
+    with RenderPool(_processes(options.render)) if output is not None else nullcontext() as pool:
+        with timer.stage("load"):
+            loaded = load_mesh(scan, options.input.units, options.input.max_faces)
+            ann = load_annotations(annotations, loaded.stats.scale_to_m) if annotations is not None else Annotations()
+        # with keyword parameters, an absent --units comes as None (dropped by from_kwargs)
+        explicit = params.get("units") is not None if "units" in params else None
+        result = compute(loaded.mesh, loaded.stats, ann, options, timer, units_explicit=explicit)
+        if loaded.warnings:  # the reader's (float32 precision) first, before the stages'
+            result = replace(result, warnings=(*loaded.warnings, *result.warnings))
+        if output is None:
+            return replace(result, timings={**timer.timings, "total": time.perf_counter() - t0})
+        written = write_results(result, Path(output), force=force, timer=timer, started=t0, pool=pool)
+    return replace(result, output_dir=written.output_dir, files=written.files, timings=written.timings)
