@@ -25,8 +25,14 @@ browser:
 	    { apt-get update -q >/dev/null 2>&1 && DEBIAN_FRONTEND=noninteractive apt-get install -y -q chromium >/dev/null 2>&1; }; }; } || \
 	  echo "Chromium could not be installed: the browser tests will be skipped"
 
-test: $(STAMP) browser smoke
+test: $(STAMP) browser lint smoke
 	$(BIN)/python -m pytest -n 2 -q --doctest-modules src/meshplan tests
+
+# Gates: the linter (pyflakes, pycodestyle, isort, pyupgrade, bugbear, numpy docstrings) and the
+# type checker on the package, both configured in pyproject.toml.
+lint: $(STAMP)
+	$(BIN)/ruff check src
+	$(BIN)/mypy
 
 # A plain `pip install meshplan` (the wheel and its declared dependencies, no extras) in a new
 # bare virtual environment: --version, synth and run must work there.
