@@ -98,9 +98,14 @@ def compute(
     with timer.stage("walls"):
         walls = upright.walls if upright.walls is not None else find_flat_walls(plan_mesh, orientation, options.walls)
     with timer.stage("rooms"):
-        openings = upright.openings if upright.openings is not None else find_openings(plan_mesh, orientation, walls, options.plan)
-        rooms = find_rooms(plan_mesh, orientation, walls, options.plan, options.orient.slab_tolerance_m)
+        # the faces paired into walls first: an opening through a wall is found on both its faces
+        # and reported once (with the user's wall thickness limits)
         physical = physical_walls(walls, options.walls.max_wall_thickness_m, options.walls.default_wall_thickness_m)
+        if upright.openings is not None:
+            openings = upright.openings
+        else:
+            openings = find_openings(plan_mesh, orientation, walls, options.plan, physical=physical)
+        rooms = find_rooms(plan_mesh, orientation, walls, options.plan, options.orient.slab_tolerance_m)
     with timer.stage("slice_draw"):
         ann_story = assign_faces(plan_annotations.positions[:, 1], orientation.stories) if len(plan_annotations) else np.zeros(0, np.int64)
         plans = []

@@ -18,7 +18,7 @@ from .geometry import Mesh
 from .options import RunOptions
 from .orient import Orientation, orient
 from .plan import Openings, find_openings
-from .walls import FlatWalls, find_flat_walls
+from .walls import FlatWalls, find_flat_walls, physical_walls
 
 log = logging.getLogger(__name__)
 
@@ -69,7 +69,8 @@ def up_by_doors(mesh: Mesh, orientation: Orientation, plan_mesh: Mesh, options: 
 
     def doors(o: Orientation, m: Mesh) -> tuple[int, FlatWalls, Openings]:
         walls = find_flat_walls(m, o, options.walls)
-        openings = find_openings(m, o, walls, options.plan)
+        physical = physical_walls(walls, options.walls.max_wall_thickness_m, options.walls.default_wall_thickness_m)
+        openings = find_openings(m, o, walls, options.plan, physical=physical)
         return sum(k == "door" for k in openings.kind), walls, openings
 
     n_here, walls, openings = doors(orientation, plan_mesh)
