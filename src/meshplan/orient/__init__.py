@@ -179,7 +179,7 @@ def orient(mesh: Mesh, params: OrientParams | None = None, up_hint: FloatArray |
     )
     alignment = WallAlignment(alignment.yaw, directions, alignment.centers @ r_yaw.T, alignment.weights, alignment.faces_used)
     face_story = assign_faces(heights, stories)
-    flipped = inward_flips(mesh, normals, centroids, heights, stories)
+    flipped = inward_flips(mesh, normals, centroids, heights, stories, params.slab_tolerance_m)
     for s in stories:
         if s.height > params.max_story_height_m:
             raise GeometryError(f"implausible story height of {s.height:.1f} m", "check the units of the scan (--units)")

@@ -30,7 +30,7 @@ import numpy as np
 
 from ..geometry import FloatArray, unit
 from ..sphere import trimmed_spherical_kmeans
-from .params import OrientParams
+from .params import ALIGN_VERTICAL_DEG, NEW_DIRECTION_DEG, OrientParams
 
 #: Clusters whose directions lie within this angle (degrees) of one right-angle lattice are
 #: the square walls of one building, seen with noise: the centres of clusters of square walls
@@ -100,7 +100,7 @@ def align_walls(normals: FloatArray, areas: FloatArray, heights: FloatArray, flo
     n, w = normals[sel], areas[sel]
     if len(n) == 0:
         return WallAlignment(0.0, (), np.zeros((0, 3)), np.zeros(0), 0)
-    vertical = np.abs(n[:, 1]) < np.sin(np.radians(10.0))
+    vertical = np.abs(n[:, 1]) < np.sin(np.radians(ALIGN_VERTICAL_DEG))
     theta0 = _manhattan_angle(n[vertical], w[vertical]) if vertical.any() else 0.0
     angles = theta0 + np.arange(4) * np.pi / 2
     walls = np.c_[np.cos(angles), np.zeros(4), np.sin(angles)]
@@ -114,7 +114,7 @@ def align_walls(normals: FloatArray, areas: FloatArray, heights: FloatArray, flo
     res = trimmed_spherical_kmeans(n, w, centers, schedule)
     if params.wall_clusters == 0:
         vertical_area = w[vertical].sum()
-        far = np.cos(np.radians(15.0))
+        far = np.cos(np.radians(NEW_DIRECTION_DEG))
         for _ in range(12):
             wall_centers = res.centers[: len(res.centers) - len(extra)]
             # wall normals far from every direction found so far

@@ -14,6 +14,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
 from ..geometry import FloatArray, IntArray, Mesh
+from .params import FACING_HORIZONTAL_DEG, FACING_VERTICAL_DEG
 from .stories import Story
 
 
@@ -60,7 +61,7 @@ def inward_flips(
     normals_y = normals[:, 1]
     areas = mesh.face_areas
     vote = np.zeros(mesh.n_faces)
-    horiz = np.abs(normals_y) > np.cos(np.radians(20.0))
+    horiz = np.abs(normals_y) > np.cos(np.radians(FACING_HORIZONTAL_DEG))
     for s in stories:
         near_floor = horiz & (np.abs(heights - s.floor) < tolerance_m)
         vote[near_floor] += areas[near_floor] * np.sign(normals_y[near_floor])
@@ -98,7 +99,7 @@ def _wall_votes(
     """``(F,)`` votes of the near-vertical faces in ``candidates``: positive when their normal
     points to the side where their story's floor is."""
     out = np.zeros(len(normals))
-    vertical = candidates & (np.abs(normals[:, 1]) < np.sin(np.radians(30.0)))
+    vertical = candidates & (np.abs(normals[:, 1]) < np.sin(np.radians(FACING_VERTICAL_DEG)))
     for s in stories:
         floor = horiz & (np.abs(heights - s.floor) < tolerance_m)
         mine = np.flatnonzero(vertical & (heights > s.floor) & (heights < s.ceiling))

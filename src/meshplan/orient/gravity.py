@@ -59,7 +59,7 @@ from ..errors import GeometryError
 from ..geometry import FloatArray, Mesh, unit
 from ..sphere import axial_peaks
 from .levels import _choose_stories, find_spikes
-from .params import OrientParams
+from .params import STANDING_DEG, OrientParams
 
 _AXES = {
     "+x": (1.0, 0.0, 0.0),
@@ -175,7 +175,7 @@ def sign_evidence(centroids: FloatArray, normals: FloatArray, areas: FloatArray,
         return 0.0
     e1 = unit(np.cross(axis, [1.0, 0.0, 0.0] if abs(axis[0]) < 0.9 else [0.0, 1.0, 0.0]))
     e2 = np.cross(axis, e1)
-    vert = np.abs(nh) < np.cos(np.radians(45.0))
+    vert = np.abs(nh) < np.cos(np.radians(STANDING_DEG))
     cv, hv = centroids[vert], h[vert]
     plan = np.floor(np.c_[cv @ e1, cv @ e2] / _OCCUPANCY_CELL_M).astype(np.int64)
     if len(plan):

@@ -45,6 +45,38 @@ MAX_STORY_HEIGHT_LIMIT_M = 100.0
 #: every 11 degrees around the compass, more only splits one wall direction into several.
 MAX_WALL_CLUSTERS = 16
 
+# What "horizontal" and "vertical" mean in each step of this stage, in degrees. They differ on
+# purpose: each is as wide as what it must catch and no wider.
+
+#: Faces within this angle of horizontal near a floor or ceiling vote for their patch's winding
+#: (:func:`meshplan.orient.facing.inward_flips`): floors are level to a degree, but a headset
+#: rounds the floor into the walls over 10-20 cm, and those faces still say which side is up;
+#: steeper ones (ramps, stair nosings) could say either.
+FACING_HORIZONTAL_DEG = 20.0
+
+#: Faces within this angle of vertical vote for their patch's winding by the side their floor is
+#: on: walls lean a few degrees in a coarse scan, and their rounded foot up to 30.
+FACING_VERTICAL_DEG = 30.0
+
+#: Faces within this angle of vertical start the wall alignment (the circular mean of four times
+#: their azimuth): only the walls' own faces, not the bevels along floor and ceiling, whose
+#: azimuths are those of the walls but whose areas would weigh in twice.
+ALIGN_VERTICAL_DEG = 10.0
+
+#: A wall normal farther than this from every wall direction found so far seeds a new direction
+#: (non-Manhattan buildings): the trimmed k-means keeps walls within 3-10 degrees of their
+#: cluster, so 15 degrees is clearly beyond any cluster's own scatter.
+NEW_DIRECTION_DEG = 15.0
+
+#: Faces within this angle of horizontal at a floor or ceiling height are slab faces (the paper's
+#: ``RemoveCeilingsAndFloors``): as wide as the paper's up cone (30 degrees), so that the slab
+#: faces removed are those the gravity step treated as floor.
+SLAB_HORIZONTAL_DEG = 30.0
+
+#: A face stands (wall, furniture side) when its normal is closer to horizontal than to vertical:
+#: the occupancy cue of the up search asks only where things stand, not how steep they are.
+STANDING_DEG = 45.0
+
 _ANGLE = Real(0.0, 90.0, closed="neither", why="an angle from the vertical or from a direction")
 _FRACTION = Real(0.0, 1.0)
 _GAP = Real(0.0, MAX_LENGTH_M, why="lengths beyond 1 km are a unit mistake")

@@ -8,6 +8,7 @@ import numpy as np
 
 from ..geometry import FloatArray, IntArray
 from .levels import Levels
+from .params import SLAB_HORIZONTAL_DEG
 
 
 @dataclass(frozen=True)
@@ -68,7 +69,7 @@ def slab_faces(
     """Faces that are floor or ceiling surfaces: within 30 degrees of horizontal and within
     ``tolerance_m`` of a story's floor or ceiling height (the paper's
     ``RemoveCeilingsAndFloors``)."""
-    horizontal = np.abs(normal_y) >= np.cos(np.radians(30.0))
+    horizontal = np.abs(normal_y) >= np.cos(np.radians(SLAB_HORIZONTAL_DEG))
     near = np.zeros(len(heights), dtype=bool)
     for s in stories:
         if floors:
