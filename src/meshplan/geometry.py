@@ -153,6 +153,12 @@ class Mesh:
         )
 
 
+#: Length (m) of the probe drawn from an annotated object along its direction, in every plan,
+#: model and CAD file: long enough to read the direction at 1:50-1:100 (4-8 mm on paper), short
+#: enough not to cross a 1 m wide corridor.
+ANNOTATION_PROBE_M = 0.4
+
+
 @dataclass(frozen=True, eq=False)
 class Annotations:
     """Objects placed by the user in the scan: sensors, thermostats, doors, windows.

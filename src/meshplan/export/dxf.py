@@ -10,7 +10,7 @@ import io
 
 import numpy as np
 
-from ..geometry import Annotations
+from ..geometry import ANNOTATION_PROBE_M, Annotations
 from ..slicing import chain_segments
 from ..validation import plain_text
 
@@ -69,7 +69,7 @@ def drafting_dxf(
         d = annotations.directions[i]
         if np.all(np.isfinite(d)) and np.hypot(d[0], d[2]) > 1e-6:
             n = np.hypot(d[0], d[2])
-            msp.add_line(c, (c[0] + 0.4 * d[0] / n, c[1] - 0.4 * d[2] / n), dxfattribs={"layer": "ANNOTATIONS"})
+            msp.add_line(c, (c[0] + ANNOTATION_PROBE_M * d[0] / n, c[1] - ANNOTATION_PROBE_M * d[2] / n), dxfattribs={"layer": "ANNOTATIONS"})
         msp.add_text(_literal_text(f"{label} ({kind})"), height=0.12, dxfattribs={"layer": "TEXT"}).set_placement((c[0] + 0.1, c[1] + 0.1))
     for room in rooms:
         outline = [_p(c) for c in list(room.polygon.exterior.coords)[:-1]]

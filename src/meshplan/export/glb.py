@@ -7,7 +7,7 @@ from typing import cast
 
 import numpy as np
 
-from ..geometry import Annotations, Mesh
+from ..geometry import ANNOTATION_PROBE_M, Annotations, Mesh
 
 #: RGBA colour of each annotation kind.
 KIND_RGBA = {
@@ -29,7 +29,7 @@ def _trimesh(mesh: Mesh, rgba):
     return tm
 
 
-def annotation_markers(annotations: Annotations, radius_m: float = 0.06, probe_m: float = 0.35):
+def annotation_markers(annotations: Annotations, radius_m: float = 0.06, probe_m: float = ANNOTATION_PROBE_M):
     """``(name, trimesh.Trimesh)`` markers: a sphere per annotation and a thin cylinder along
     its probe direction."""
     import trimesh

@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .._version import __version__
-from ..geometry import ANNOTATION_KINDS, Mesh, transform_directions, transform_points
+from ..geometry import ANNOTATION_KINDS, ANNOTATION_PROBE_M, Mesh, transform_directions, transform_points
 from ..orient import without_ceiling
 from .glb import KIND_RGBA, MESH_RGBA, WALL_RGBA
 
@@ -35,7 +35,7 @@ MAX_FACES = 120_000
 SUBSAMPLE_SEED = 0
 
 #: Length of the probe drawn from each annotation along its direction, metres.
-PROBE_M = 0.35
+PROBE_M = ANNOTATION_PROBE_M
 
 #: Label prefix suggested for a new annotation of each kind.
 KIND_PREFIX = {"sensor": "S", "thermostat": "T", "window": "W", "door": "D", "other": "O"}

@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from ..geometry import ANNOTATION_PROBE_M
 from ..units import FOOT_M, INCH_M
 from ..validation import PLAIN_TEXT_KW, plain_text
 from .params import STANDARD_SCALES, RenderParams
@@ -183,7 +184,7 @@ def draw_scale_bar(fig, sheet: Sheet, params: RenderParams) -> None:
     ax.text(total * 1.04, 0.5, name, ha="left", va="center", fontsize=6)
 
 
-def draw_annotations(ax, labels, kinds, positions, directions, probe_m: float = 0.4) -> None:
+def draw_annotations(ax, labels, kinds, positions, directions, probe_m: float = ANNOTATION_PROBE_M) -> None:
     """Annotated objects as red markers with their labels and probe directions."""
     if not len(labels):
         return
