@@ -55,7 +55,7 @@ def test_a_flat_floor_wins_over_the_normals():
     """Up from the normals 1 degree off, a flat floor: the fit puts it right."""
     c, n, a = floor_patch()
     rough = unit(np.array([np.sin(np.radians(1.0)), np.cos(np.radians(1.0)), 0.0]))
-    up, used = refine_with_slabs(c, n, a, rough, [0.0], OrientParams())
+    up, used = refine_with_slabs(c, n, a, rough, [0.0], OrientParams(gravity_fit_blend=True))
     assert used > 0
     assert angle_deg(up, [0, 1, 0]) < 0.05
 
@@ -72,7 +72,7 @@ def test_a_warped_floor_does_not_pull_up_far_from_the_normals(seed):
     truth = np.array([0.0, 1.0, 0.0])
     x = c - np.average(c, axis=0, weights=a)
     plain = np.linalg.eigh((x * a[:, None]).T @ x)[1][:, 0]
-    up, used = refine_with_slabs(c, n, a, truth, [float(np.average(c[:, 1], weights=a))], OrientParams())
+    up, used = refine_with_slabs(c, n, a, truth, [float(np.average(c[:, 1], weights=a))], OrientParams(gravity_fit_blend=True))
     assert used > 0
     assert angle_deg(plain, truth) > 0.5  # the warp does tilt the plane
     assert angle_deg(up, truth) < 0.75 * angle_deg(plain, truth)

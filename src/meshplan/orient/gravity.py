@@ -26,10 +26,12 @@ from the floor and ceiling structure:
    tell: they may face either way.
 
 :func:`refine_with_slabs` then fits the floors' common normal to face positions (see
-``OrientParams.gravity_plane_fit``) and combines it with Method 2's up by inverse variance: the
-fit's from a block jackknife over the floor (:func:`floor_fit_uncertainty_deg`), the normals' a
-fixed :data:`_NORMALS_ERROR_DEG`. A flat floor's fit wins (synthetic scans, HoloLens 2); a warped
-floor's (the Tango rooms, domed by 3-4 cm) counts for less, as it is less sure.
+``OrientParams.gravity_plane_fit``), so that the plan's floor is level. With
+``gravity_fit_blend`` it is combined with Method 2's up by inverse variance instead: the fit's
+from a block jackknife over the floor (:func:`floor_fit_uncertainty_deg`), the normals' a fixed
+:data:`_NORMALS_ERROR_DEG`; a flat floor's fit wins (synthetic scans, HoloLens 2), a warped
+floor's (the Tango rooms, domed by 3-4 cm) counts for less. Off by default: a floor plan wants its
+floor level, and the real scans' truth is levelled on the floor the same way.
 
 Decided against, measured on the 16 real scans (2026-12):
 
@@ -463,7 +465,7 @@ def refine_with_slabs(
         sd = float(np.sqrt(np.average(resid**2, weights=a)))
         slabs = np.asarray([float(means[j] @ g) if wsum[j] > 0 else slabs[j] for j in range(len(slabs))])
         window = max(3.0 * sd, 0.02)
-    if used:
+    if used and params.gravity_fit_blend:
         g = _blend_by_uncertainty(unit(up), g, fit_p, fit_a, fit_k)
     return g, used
 

@@ -113,6 +113,14 @@ class OrientParams:
         times more precise on noisy scans (median 0.05 degrees instead of 0.4 on the synthetic
         rooms). Ceilings are left out: on real scans their soffits, fixtures and drift made the
         fit worse. Not in the paper; off reproduces it.
+    gravity_fit_blend
+        Combine the fitted floor normal with Method 2's up by inverse variance (the fit's
+        measured by a block jackknife), so that a domed or sloping floor counts for less and up
+        follows the normals there. Off (the default) keeps up the normal of the floor's best
+        plane: the plan then has its floor level, as a draughtsman levels a survey and as the
+        hand-digitized truth of the real scans is levelled; on, up is nearer gravity on a warped
+        floor (a Tango room domed by 3-4 cm: 1.1 -> 0.3 degrees from the device's up, but 0.4 ->
+        1.3 from its levelled floor).
     horizontal_tolerance_deg
         A face is horizontal (floor, ceiling, table top) when its normal is within this angle of
         the vertical ("a small angle" in the paper).
@@ -157,6 +165,7 @@ class OrientParams:
         "gravity_method": Options(GRAVITY_METHODS),
         "gravity_cones_deg": _SCHEDULE,
         "gravity_plane_fit": Boolean(),
+        "gravity_fit_blend": Boolean(),
         "horizontal_tolerance_deg": _ANGLE,
         "level_bucket_m": Real(
             MIN_LEVEL_BUCKET_M, MAX_LEVEL_BUCKET_M, why="finer than 1 mm no scanner resolves; coarser than 0.5 m merges floors and furniture"
@@ -183,6 +192,7 @@ class OrientParams:
     gravity_method: str = "kmeans"
     gravity_cones_deg: tuple[float, ...] = (30.0, 20.0, 10.0, 5.0, 3.0)
     gravity_plane_fit: bool = True
+    gravity_fit_blend: bool = False
     horizontal_tolerance_deg: float = 10.0
     level_bucket_m: float = 2 * INCH_M
     min_room_height_m: float = 2.0
