@@ -30,6 +30,10 @@ floor is nearest (within :data:`STORY_MATCH_M`):
   story; the ceiling is skipped where the truth has none (``ceiling: null``).
 
 Plan stories without a truth story are not scored (listed in ``unscored_plan_stories``).
+
+Why one long module: one scorer per element kind (stories, walls, rooms, openings) plus the
+frame mapping and the text report, all following the truth README's rules, which read best side
+by side.
 """
 
 from __future__ import annotations

@@ -25,6 +25,9 @@ to tuples.
 The label rules (:func:`label_problem`, :func:`plain_text`) live here too: annotation files are
 refused when a label breaks them, and every writer passes labels through :func:`plain_text` so
 that labels made in Python are drawn literally as well.
+
+Why one long module: the constraint classes, the decorator and the label rules form one small
+library used by every parameter class; splitting it would only move imports around.
 """
 
 from __future__ import annotations

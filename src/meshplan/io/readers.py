@@ -14,6 +14,11 @@ and triangles, and reads a cut-short OFF as a smaller mesh without a word. These
 
 Everything is done with whole-array numpy operations on the file's bytes; no Python loop runs
 per line, vertex or face (OBJ is read in chunks of :data:`OBJ_CHUNK_BYTES` to bound memory).
+
+Why one long module: three formats, each a header parser and a vectorised body reader sharing
+the chunked-bytes helpers and the truncation checks; trimesh resolves negative OBJ indices per
+object (wrongly) and cannot read mixed-polygon binary PLY, which is why these readers exist at
+all.
 """
 
 from __future__ import annotations

@@ -21,6 +21,10 @@ across it, positive into the room the face was scanned from):
   quad in the wall plane, over an uncut wall. A separate connected piece of the mesh that lies
   in the wall's slab, covers its rectangle, stands on the floor, has a door's width and height
   and ends below the ceiling is such a door.
+
+Why one long module: a face's raster (built once) serves both searches, doors read column by
+column and windows as regions, with the shared edge and straightness tests; the parametric door
+boxes use the same slab.
 """
 
 from __future__ import annotations

@@ -13,6 +13,10 @@ Example
 >>> scan = generate(preset="room", seed=3, triangle_size_m=(0.15, 0.25))
 >>> scan.truth["rooms"][0]["label"]
 'room'
+
+Why one long module: it is the generator's public face: SynthParams with every option and its
+validation, the presets table and :func:`generate`, which only sequences the submodules (layout,
+shell, furniture, fixtures, defects, tessellation, truth).
 """
 
 from __future__ import annotations

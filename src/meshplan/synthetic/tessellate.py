@@ -9,6 +9,9 @@ Openings are cut in two ways. *Hard* cuts (doors, windows, stair openings, the o
 L-shaped floor) put grid lines on their edges, so the cut is exact and straight. *Soft* cuts
 (holes, missing wall strips) drop the triangles whose centroid falls inside, which leaves the
 ragged edge of a real scan.
+
+Why one long module: the HoloLens-like tessellation (graded grids, jitter, the diagonal choice,
+decimation) is one algorithm whose steps share the grid arrays.
 """
 
 from __future__ import annotations

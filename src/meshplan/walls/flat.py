@@ -15,6 +15,11 @@ passes through the area-weighted median of the centroids across the wall; its re
 its triangles along the wall and in height. Faces larger than half a box are split first, so
 that the centroids of parametric models (two triangles a wall) sample their surfaces. Coplanar rectangles of one direction
 separated by less than ``merge_gap_m`` are one wall, so that a door or a missing strip does not split it (an addition to the paper).
+
+Why one long module: the stage is one pipeline of array steps over the same segment tables
+(cluster, judge, straighten, merge, build rectangles), each feeding the next its intermediate
+arrays; split, they would pass a dozen parallel arrays across module boundaries. The per-strip
+evidence lives in :mod:`~meshplan.walls.evidence`.
 """
 
 from __future__ import annotations
