@@ -4,7 +4,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed-stamp
 
-.PHONY: demo test bench clean lint browser smoke
+.PHONY: demo test bench clean lint browser smoke unit
 
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -27,6 +27,10 @@ browser:
 
 test: $(STAMP) browser lint smoke
 	$(BIN)/python -m pytest -n 2 -q --doctest-modules src/meshplan tests
+
+# The unit layer: every test but the whole runs of meshplan and the real scans, in seconds.
+unit: $(STAMP)
+	$(BIN)/python -m pytest -n 2 -q -m "not slow and not realscan" tests
 
 # Gates: the linter (pyflakes, pycodestyle, isort, pyupgrade, bugbear, numpy docstrings) and the
 # type checker on the package, both configured in pyproject.toml.

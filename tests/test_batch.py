@@ -18,6 +18,8 @@ from meshplan.cli import main
 from meshplan.export.synth import write_synthetic
 from meshplan.synthetic import SynthParams, generate
 
+pytestmark = pytest.mark.slow  # whole runs of meshplan: not part of the unit layer (-m "not slow")
+
 #: The small rooms of the batch: (directory, seed, format). Coarse triangles keep each run ~1 s.
 ROOMS = (("r0", 0, "obj"), ("r1", 1, "obj"), ("r2", 2, "ply"))
 BAD = "bad.ply"

@@ -14,6 +14,8 @@ import pytest
 from meshplan.evaluate import truth_to_plan
 from meshplan.export import plan_document
 
+pytestmark = pytest.mark.slow  # whole runs of meshplan: not part of the unit layer (-m "not slow")
+
 SCENES = [(p, s) for p in ("apartment", "office") for s in (1, 2, 3)]
 
 #: Smallest precision and recall, pooled per preset (the level reached is 1.0 for both).

@@ -64,7 +64,9 @@ def test_bbox_method_is_available_and_rougher():
     scan = generate(SynthParams(preset="apartment", seed=0, tilt_deg=4.0))
     o = orient(scan.mesh, OrientParams(gravity_method="bbox"))
     gravity, _, _ = errors(o, scan.truth)
-    assert gravity < 6.0  # the bounding box follows the building, not gravity
+    # the bounding box follows the building, not gravity: rougher than Method 2's 0.05 degrees
+    # (it measures 0.1-0.2 here), but far below the 4 degrees a method that did nothing would keep
+    assert gravity < 0.5
 
 
 def test_explicit_up_axis():

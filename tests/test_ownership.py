@@ -19,6 +19,8 @@ from meshplan.errors import OutputError
 from meshplan.io import check_output_dir, staged_directory
 from meshplan.io.atomic import KIND_PLANS, KIND_SYNTHETIC, STAMP_NAME, remove_stale, write_stamp
 
+pytestmark = pytest.mark.slow  # whole runs of meshplan: not part of the unit layer (-m "not slow")
+
 
 def _tree(directory: Path) -> dict[str, bytes]:
     return {str(p.relative_to(directory)): p.read_bytes() for p in sorted(directory.rglob("*")) if p.is_file()}

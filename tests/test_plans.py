@@ -19,6 +19,8 @@ from meshplan.walls import find_flat_walls
 
 from conftest import box_room
 
+pytestmark = pytest.mark.slow  # whole runs of meshplan: not part of the unit layer (-m "not slow")
+
 SCENES = [
     ("apartment", 0, {}),
     ("apartment", 4, {"z_up": True, "winding": "outward"}),

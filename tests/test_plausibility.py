@@ -12,6 +12,8 @@ import meshplan
 from meshplan.errors import GeometryError
 from meshplan.plausibility import HALL_MAX_M, STORY_MAX_M, STORY_MIN_M
 
+pytestmark = pytest.mark.slow  # whole runs of meshplan: not part of the unit layer (-m "not slow")
+
 #: File units per metre of each unit, as a scan exported in that unit has them.
 PER_M = {"ft": 3.28084, "in": 39.37, "cm": 100.0, "mm": 1000.0}
 NAMES = {"m": "metres", "ft": "feet", "in": "inches", "cm": "centimetres", "mm": "millimetres"}

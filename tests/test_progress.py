@@ -21,6 +21,8 @@ from meshplan.pipeline import STAGES
 from meshplan.progress import STAGE_NAMES
 from meshplan.synthetic import SynthParams, generate
 
+pytestmark = pytest.mark.slow  # whole runs of meshplan: not part of the unit layer (-m "not slow")
+
 
 @pytest.fixture(scope="module")
 def scan(tmp_path_factory) -> Path:

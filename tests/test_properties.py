@@ -27,6 +27,8 @@ from meshplan.synthetic import SynthParams, generate
 
 from conftest import box_room
 
+pytestmark = pytest.mark.slow  # whole runs of meshplan: not part of the unit layer (-m "not slow")
+
 OPTIONS = RunOptions.from_kwargs(slices=10)
 
 
@@ -189,7 +191,14 @@ def test_segment_drawing_of_a_story_without_segments(base):
     _, r0 = base
     walls = replace(r0.walls, face_segment=np.full(r0.mesh.n_faces, -1), segment_story=np.zeros(0, np.int64), segment_kept=np.zeros(0, bool))
     params = r0.options.render
-    plt.close(segments_figure(r0.mesh.face_centroids, walls, 0, make_sheet(r0.mesh.face_centroids[:, [0, 2]], params), params))
+    fig = segments_figure(r0.mesh.face_centroids, walls, 0, make_sheet(r0.mesh.face_centroids[:, [0, 2]], params), params)
+    try:
+        # a sheet with its plan axes, and not one pixel of segment on it (every face is in none)
+        images = [im.get_array() for im in fig.images]  # the raster is a figure image (place_raster)
+        assert fig.axes and images
+        assert all(np.asarray(im)[..., 3].max() == 0 for im in images)
+    finally:
+        plt.close(fig)
 
 
 @examples(25)

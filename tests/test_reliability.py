@@ -29,6 +29,8 @@ from meshplan.synthetic import SynthParams, generate
 
 from conftest import box_room
 
+pytestmark = pytest.mark.slow  # whole runs of meshplan: not part of the unit layer (-m "not slow")
+
 #: (name, argv without the output, (words of the problem, words of what to do))
 Case = tuple[str, list[str], tuple[str, str]]
 

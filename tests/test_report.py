@@ -18,6 +18,8 @@ from meshplan.export.report import report_html, view_meshes
 from meshplan.export.synth import write_synthetic
 from meshplan.synthetic import SynthParams, generate
 
+pytestmark = pytest.mark.slow  # whole runs of meshplan: not part of the unit layer (-m "not slow")
+
 CHROMIUM = Path("/usr/bin/chromium")
 CHROMIUM_ARGS = [
     "--no-sandbox",

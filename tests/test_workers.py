@@ -17,7 +17,10 @@ from pathlib import Path
 
 import pytest
 
-pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="drawing workers are forked on Linux only")
+pytestmark = [
+    pytest.mark.slow,  # whole runs of meshplan: not part of the unit layer (-m "not slow")
+    pytest.mark.skipif(not sys.platform.startswith("linux"), reason="drawing workers are forked on Linux only"),
+]
 
 #: How long (s) a killed run's workers may take to die: the kernel signals them at once
 #: (prctl); the brief allows 2 s.
