@@ -10,18 +10,20 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from ..errors import MeshplanError
-from ..io import MESH_FORMATS
+from ..io import SCAN_FORMATS, is_scan_file
 from .summary import SUMMARY_FILES
 
 __all__ = ["DEFAULT_ANNOTATION_PATTERNS", "find_annotations", "find_scans", "output_names"]
 
 
 def _mesh_file(path: Path) -> bool:
-    return path.suffix.lower() in MESH_FORMATS
+    """A scan by its extension (meshes, point clouds, USD: :data:`meshplan.io.SCAN_FORMATS`);
+    a ``.txt`` only when it holds points."""
+    return is_scan_file(path)
 
 
 def _formats() -> str:
-    return ", ".join(sorted(MESH_FORMATS))
+    return ", ".join(sorted(SCAN_FORMATS))
 
 
 def _inside(path: Path, folder: Path | None) -> bool:
@@ -77,7 +79,7 @@ def find_scans(
         for root, dirs, files in os.walk(path):
             # skip hidden directories (e.g. half-written results) and the batch's own output
             dirs[:] = sorted(d for d in dirs if not d.startswith(".") and not _inside(Path(root, d), excl))
-            found.extend(Path(root, f) for f in files if not f.startswith(".") and _mesh_file(Path(f)))
+            found.extend(Path(root, f) for f in files if not f.startswith(".") and _mesh_file(Path(root, f)))
         found = sorted(p for p in found if not _inside(p, excl) and not _excluded(p, skip))
         if not found:
             raise MeshplanError(

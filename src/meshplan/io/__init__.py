@@ -3,20 +3,27 @@
 
 from .annotations import annotations_document, load_annotations, parse_annotations
 from .atomic import atomic_write_bytes, atomic_write_text, check_output_dir, staged_directory
-from .mesh import MESH_FORMATS, UNITS_M, LoadedMesh, LoadStats, load_mesh, write_mesh
+from .mesh import MESH_FORMATS, POINT_FORMATS, SCAN_FORMATS, UNITS_M, USD_FORMATS, LoadedMesh, LoadStats, is_scan_file, load_mesh, write_mesh
+from .points import PointCloud, read_points
 
 __all__ = [
     "MESH_FORMATS",
+    "POINT_FORMATS",
+    "SCAN_FORMATS",
     "UNITS_M",
+    "USD_FORMATS",
     "LoadStats",
     "LoadedMesh",
     "annotations_document",
     "atomic_write_bytes",
     "atomic_write_text",
+    "PointCloud",
     "check_output_dir",
+    "is_scan_file",
     "load_annotations",
     "load_mesh",
     "parse_annotations",
+    "read_points",
     "staged_directory",
     "write_mesh",
 ]

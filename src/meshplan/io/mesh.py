@@ -25,6 +25,7 @@ import stat
 import struct
 from dataclasses import asdict, dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -38,6 +39,24 @@ log = logging.getLogger(__name__)
 
 #: File extensions meshplan reads, with the trimesh file type for each.
 MESH_FORMATS = {".obj": "obj", ".ply": "ply", ".glb": "glb", ".gltf": "gltf", ".stl": "stl", ".off": "off"}
+
+#: Point cloud extensions (:mod:`meshplan.io.points`; E57 and LAS/LAZ need the ``points`` extra).
+#: PLY and OBJ files holding vertices and no faces are read as point clouds too.
+POINT_FORMATS = {".e57": "e57", ".las": "las", ".laz": "laz", ".xyz": "xyz", ".pts": "pts", ".txt": "txt"}
+
+#: USD stage extensions (:mod:`meshplan.io.usd`; the ``usd`` extra, usd-core).
+USD_FORMATS = {".usd": "usd", ".usda": "usda", ".usdc": "usdc", ".usdz": "usdz"}
+
+#: Every extension meshplan reads as a scan, with its format: the one list ``meshplan run`` checks
+#: and ``meshplan batch`` discovers (through :func:`is_scan_file`).
+SCAN_FORMATS = {**MESH_FORMATS, **POINT_FORMATS, **USD_FORMATS}
+
+#: What a scan may be, for messages.
+SCAN_FORMAT_NAMES = "OBJ, PLY, GLB, glTF, STL, OFF, E57, LAS, LAZ, XYZ, PTS, TXT or USD/USDZ"
+
+#: Extensions other files share (notes, logs): such a file is taken as a scan by a batch only
+#: when its first line that is not a comment holds three numbers.
+AMBIGUOUS_EXTENSIONS = (".txt",)
 
 #: Length units accepted by ``--units``, in metres.
 
@@ -89,6 +108,11 @@ class LoadStats:
     dropped_duplicate: int
     vertices: int
     faces: int
+    #: point clouds only (:mod:`meshplan.io.points`): points read, kept after subsampling (one
+    #: splat each), and dropped for a NaN or infinite coordinate; 0 for meshes
+    points_read: int = 0
+    points: int = 0
+    dropped_nonfinite_points: int = 0
 
     @property
     def dropped_faces(self) -> int:
@@ -97,6 +121,9 @@ class LoadStats:
     def to_dict(self) -> dict:
         d = asdict(self)
         d["dropped_faces"] = self.dropped_faces
+        if not self.points_read:  # a mesh: plan.json as before
+            for key in ("points_read", "points", "dropped_nonfinite_points"):
+                del d[key]
         return d
 
 
@@ -113,11 +140,19 @@ class LoadedMesh:
     warnings
         One-line warnings about the file (e.g. coordinates whose float32 storage lost more
         than :data:`FLOAT32_PRECISION_WARN_M`); each is also logged on the ``meshplan`` logger.
+    cloud
+        A point cloud's points after subsampling, with their colours and intensities where the
+        file has them (:class:`meshplan.io.points.PointCloud`); ``None`` for a mesh.
+    surfels
+        A point cloud's normals and footprint areas (:class:`meshplan.io.points.Surfels`), from
+        which the splats of ``mesh`` were made; ``None`` for a mesh.
     """
 
     mesh: Mesh
     stats: LoadStats
     warnings: tuple[str, ...] = ()
+    cloud: Any = None
+    surfels: Any = None
 
 
 def check_units(units: str) -> float:
@@ -140,16 +175,16 @@ def check_mesh_path(path: str | os.PathLike) -> tuple[Path, str]:
     except OSError as exc:
         raise InputError(f"{p}: cannot be read ({exc.strerror})", "check the path and the permissions of the scan") from None
     if stat.S_ISDIR(st.st_mode):
-        raise InputError(f"{p}: is a directory, not a mesh file", "give the path of an OBJ, PLY, GLB, glTF, STL or OFF file")
+        raise InputError(f"{p}: is a directory, not a mesh file", f"give the path of an {SCAN_FORMAT_NAMES} file")
     if not stat.S_ISREG(st.st_mode):
         mode = st.st_mode
         kind = "a FIFO (named pipe)" if stat.S_ISFIFO(mode) else "a device" if stat.S_ISCHR(mode) or stat.S_ISBLK(mode) else "a socket"
         raise InputError(f"{p}: is {kind}, not a mesh file", "save the scan to a regular file and give its path")
     ext = p.suffix.lower()
-    if ext not in MESH_FORMATS:
+    if ext not in SCAN_FORMATS:
         raise InputError(
             f"{p}: unknown mesh format {ext or '(no extension)'!r}",
-            "convert the scan to OBJ, PLY, GLB, glTF, STL or OFF",
+            f"convert the scan to {SCAN_FORMAT_NAMES}",
         )
     try:
         with open(p, "rb"):
@@ -158,7 +193,34 @@ def check_mesh_path(path: str | os.PathLike) -> tuple[Path, str]:
         raise InputError(f"{p}: cannot be read ({exc.strerror})", "check the file's permissions") from None
     if st.st_size == 0:
         raise InputError(f"{p}: the file is empty", "export the scan again")
-    return p, MESH_FORMATS[ext]
+    return p, SCAN_FORMATS[ext]
+
+
+def is_scan_file(path: str | os.PathLike) -> bool:
+    """Whether a file found by a batch is a scan: its extension is one of :data:`SCAN_FORMATS`,
+    and for one of :data:`AMBIGUOUS_EXTENSIONS` (``.txt``) its first line that is not a comment
+    or a column header holds at least three numbers."""
+    p = Path(path)
+    ext = p.suffix.lower()
+    if ext not in SCAN_FORMATS:
+        return False
+    if ext not in AMBIGUOUS_EXTENSIONS:
+        return True
+    try:
+        with open(p, "rb") as fh:
+            head = fh.read(4096)
+    except OSError:
+        return True  # let the run say what is wrong
+    lines = head.splitlines()
+    for line in lines[:-1] if len(head) == 4096 else lines:  # the last line of a longer file may be cut
+        parts = line.replace(b",", b" ").replace(b";", b" ").split()
+        if not parts or parts[0].startswith((b"#", b"//")):
+            continue
+        try:
+            return len(parts) >= 3 and all(np.isfinite(float(x)) for x in parts[:3])
+        except ValueError:
+            continue  # a header naming the columns
+    return False
 
 
 def estimate_faces(path: Path, file_type: str) -> int | None:
@@ -513,9 +575,10 @@ def _read_with_trimesh(path: Path, file_type: str) -> RawMesh:
     return RawMesh(np.concatenate(verts), np.concatenate(faces), objects, extent)
 
 
-def read_raw(path: Path, file_type: str) -> RawMesh:
+def read_raw(path: Path, file_type: str, points_ok: bool = False) -> RawMesh:
     """The vertices and triangles of a mesh file, as stored (no clean-up), or an
-    :class:`InputError` saying why the file cannot be read."""
+    :class:`InputError` saying why the file cannot be read; with ``points_ok``, vertices without
+    faces are returned as they are (a point cloud) instead of refused."""
     if file_type in ("obj", "off"):
         _check_text(path, file_type)
     if file_type == "obj":
@@ -528,6 +591,8 @@ def read_raw(path: Path, file_type: str) -> RawMesh:
     else:
         raw = _read_with_trimesh(path, file_type)
     if not len(raw.faces):
+        if len(raw.vertices) and points_ok:
+            return raw
         if len(raw.vertices):
             raise InputError(
                 f"{path}: holds points but no triangles (a point cloud, or a file cut short)",
@@ -613,28 +678,52 @@ def clean_mesh(vertices: np.ndarray, faces: np.ndarray) -> tuple[Mesh, dict[str,
     return Mesh(uniq[used], remap[faces])._seed(triangles=tri[keep], _cross=cross[keep]), counts
 
 
-def load_mesh(path: str | os.PathLike, units: str = "m", max_faces: int | None = None) -> LoadedMesh:
-    """Read a mesh file into metres and drop the faces that cannot be used.
+def load_mesh(path: str | os.PathLike, units: str = "m", max_faces: int | None = None, point_voxel_m: float | None = None) -> LoadedMesh:
+    """Read a scan file into metres and drop the faces that cannot be used.
+
+    Meshes are read as they are; point clouds (E57, LAS/LAZ, XYZ/PTS/TXT, and PLY or OBJ files
+    with vertices and no faces) are subsampled and turned into splats by
+    :func:`meshplan.io.points.load_points`; USD stages (USD, USDA, USDC, USDZ) are flattened into
+    world coordinates by :func:`meshplan.io.usd.read_usd`.
 
     Parameters
     ----------
     path
-        OBJ, PLY, GLB, glTF, STL or OFF file.
+        OBJ, PLY, GLB, glTF, STL, OFF, E57, LAS, LAZ, XYZ, PTS, TXT, USD, USDA, USDC or USDZ file.
     units
-        Unit of the file's coordinates: ``m``, ``cm``, ``mm``, ``ft`` or ``in``.
+        Unit of the file's coordinates: ``m``, ``cm``, ``mm``, ``ft`` or ``in`` (a USD stage's
+        own ``metersPerUnit`` is applied on top).
     max_faces
-        Refuse files with more faces than this; ``None`` refuses only what cannot fit in the
-        available memory.
+        Refuse files with more faces (a point cloud: points after subsampling) than this;
+        ``None`` refuses only what cannot fit in the available memory.
+    point_voxel_m
+        Voxel size of a point cloud's subsampling grid, metres; ``None`` for
+        :data:`meshplan.io.points.VOXEL_M`.
 
     Raises
     ------
     InputError
-        When the file is missing, unreadable, not a mesh, too large, or has no usable face.
+        When the file is missing, unreadable, not a mesh, too large, or has no usable face, or
+        the optional reader its format needs is not installed.
     """
+    from . import points, usd
+
     scale = check_units(units)
     p, file_type = check_mesh_path(path)
-    check_size(p, file_type, max_faces)
-    raw = read_raw(p, file_type)
+    voxel_m = points.VOXEL_M if point_voxel_m is None else point_voxel_m
+    if f".{file_type}" in POINT_FORMATS or (file_type == "ply" and points.ply_holds_points_only(p)):
+        if file_type == "ply":
+            check_header(p, file_type)  # a header claiming far more vertices than the file holds
+        return points.load_points(p, file_type, units, max_faces, voxel_m)
+    raw: RawMesh
+    if f".{file_type}" in USD_FORMATS:
+        scene = usd.read_usd(p, max_faces)
+        scale, raw = scale * scene.meters_per_unit, scene
+    else:
+        check_size(p, file_type, max_faces)
+        raw = read_raw(p, file_type, points_ok=file_type in ("obj", "off"))
+    if not len(raw.faces):  # an OBJ or OFF with vertices only: a point cloud
+        return points.load_points(p, file_type, units, max_faces, voxel_m, cloud=points.PointCloud(raw.vertices))
     vertices, faces, objects = raw.vertices, raw.faces, raw.objects
     n_v, n_f = len(vertices), len(faces)
     if faces.size and (faces.min() < 0 or faces.max() >= n_v):
