@@ -78,7 +78,7 @@ def _cases(tmp: Path, good: Path) -> list[Case]:
     cases.append(("missing file", [str(tmp / "nope.obj")], ("file not found", "check the path")))
     (tmp / "adir.obj").mkdir()
     cases.append(("directory", [str(tmp / "adir.obj")], ("is a directory, not a mesh file", "give the path of an OBJ")))
-    cases.append(("unknown extension", [file("scan.xyz", b"1 2 3\n")], ("unknown mesh format '.xyz'", "convert the scan to OBJ")))
+    cases.append(("unknown extension", [file("scan.abc", b"1 2 3\n")], ("unknown mesh format '.abc'", "convert the scan to OBJ")))
     cases.append(("empty file", [file("empty.ply", b"")], ("the file is empty", "export the scan again")))
     rng = np.random.default_rng(0)
     garbage = {

@@ -21,6 +21,7 @@ from .geometry import Annotations
 from .io import check_output_dir, load_annotations, load_mesh
 from .options import RunOptions
 from .pipeline import compute
+from .plan.elements import load_room_edits
 from .result import Progress, Result, _Timer
 
 log = logging.getLogger(__name__)
@@ -37,6 +38,7 @@ def run(
     scan: str | os.PathLike,
     *,
     annotations: str | os.PathLike | None = None,
+    rooms: str | os.PathLike | None = None,
     output: str | os.PathLike | None = None,
     force: bool = False,
     progress: Progress | None = None,
@@ -51,6 +53,9 @@ def run(
         OBJ, PLY, GLB/glTF, STL or OFF file.
     annotations
         Optional annotation file (JSON, input coordinates).
+    rooms
+        Optional rooms.json (or a previous plan.json; plan frame): the numbers, names and types
+        of the rooms it matches by position (:func:`meshplan.plan.elements.load_room_edits`).
     output
         Directory to write the results to; nothing is written when ``None``. It must not exist
         unless ``force``.
@@ -85,17 +90,18 @@ def run(
         raise TypeError("give either options or keyword parameters, not both")
     if output is not None:
         # the scan and the annotations must survive a --force that names their directory
-        check_output_dir(output, force, protect=(scan, annotations))
+        check_output_dir(output, force, protect=(scan, annotations, rooms))
+    edits = load_room_edits(rooms) if rooms is not None else ()  # refused before any work
     timer = _Timer(progress)
     t0 = time.perf_counter()
     # the drawing workers start now and get ready while the stages compute
     with RenderPool(_processes(options.render)) if output is not None else nullcontext() as pool:
         with timer.stage("load"):
-            loaded = load_mesh(scan, options.input.units, options.input.max_faces)
+            loaded = load_mesh(scan, options.input.units, options.input.max_faces, point_voxel_m=options.input.point_voxel_m)
             ann = load_annotations(annotations, loaded.stats.scale_to_m) if annotations is not None else Annotations()
         # with keyword parameters, an absent --units comes as None (dropped by from_kwargs)
         explicit = params.get("units") is not None if "units" in params else None
-        result = compute(loaded.mesh, loaded.stats, ann, options, timer, units_explicit=explicit)
+        result = compute(loaded.mesh, loaded.stats, ann, options, timer, units_explicit=explicit, room_edits=edits)
         if loaded.warnings:  # the reader's (float32 precision) first, before the stages'
             result = replace(result, warnings=(*loaded.warnings, *result.warnings))
         if output is None:

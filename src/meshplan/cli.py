@@ -135,9 +135,16 @@ def _setup_logging(verbose: int, quiet: bool) -> None:
 
 @app.command()
 def run(
-    scan: Path = typer.Argument(..., help="Scanned mesh: OBJ, PLY, GLB/glTF, STL or OFF."),
+    scan: Path = typer.Argument(
+        ...,
+        help="Scan: a mesh (OBJ, PLY, GLB/glTF, STL, OFF), a point cloud (E57, LAS/LAZ, PLY or OBJ without faces, "
+        "XYZ/PTS/TXT; the points extra) or a USD stage (USD/USDA/USDC/USDZ, RoomPlan, Polycam; the usd extra).",
+    ),
     output: Optional[Path] = typer.Option(None, "--output", "-o", help="Output directory [default: ./meshplan-out/<scan name>]."),
     annotations: Optional[Path] = typer.Option(None, "--annotations", "-a", help="Annotations JSON (input coordinates)."),
+    rooms: Optional[Path] = typer.Option(
+        None, "--rooms", help="rooms.json (or a previous plan.json) whose room numbers, names and types carry over, matched by position."
+    ),
     force: bool = typer.Option(False, "--force", "-f", help="Replace an existing output directory."),
     units: Optional[Units] = typer.Option(None, "--units", help=_d("units", "Unit of the scan's coordinates.")),
     up: Optional[Up] = typer.Option(None, "--up", help=_d("up", "Input axis that is roughly up, or auto.")),
@@ -163,6 +170,14 @@ def run(
         None, "--default-ceiling-height", help=_d("default_ceiling_height_m", "Ceiling height assumed when none is scanned (m).")
     ),
     ifc: bool = typer.Option(False, "--ifc", help="Also write model.ifc (IFC4; needs the ifc extra)."),
+    gbxml: bool = typer.Option(False, "--gbxml", help="Also write model.gbxml (gbXML 7.03 energy model: a space and zone per room)."),
+    idf: bool = typer.Option(False, "--idf", help="Also write model.idf (EnergyPlus, translated by OpenStudio; needs the energy extra)."),
+    osm: bool = typer.Option(False, "--osm", help="Also write model.osm (OpenStudio model; needs the energy extra)."),
+    site_lat: Optional[float] = typer.Option(None, "--site-lat", help=_d("site_lat_deg", "Site latitude of the energy model (degrees north; Chicago O'Hare).")),
+    site_lon: Optional[float] = typer.Option(None, "--site-lon", help=_d("site_lon_deg", "Site longitude of the energy model (degrees east).")),
+    north_deg: Optional[float] = typer.Option(
+        None, "--north-deg", help=_d("north_deg", "Compass bearing of plan -z, up the page (degrees clockwise from north; 0: plan +z is south).")
+    ),
     max_faces: Optional[int] = typer.Option(None, "--max-faces", help="Refuse larger scans [default: what fits in memory]."),
     set_: list[str] = typer.Option([], "--set", help="Any other parameter, NAME=VALUE (see plan.json 'parameters')."),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="Print nothing but errors."),
@@ -196,21 +211,47 @@ def run(
         default_ceiling_height_m=default_ceiling_height,
         max_faces=max_faces,
         ifc=ifc or None,
+        gbxml=gbxml or None,
+        idf=idf or None,
+        osm=osm or None,
+        site_lat_deg=site_lat,
+        site_lon_deg=site_lon,
+        north_deg=north_deg,
     )
     out = output if output is not None else api.default_output_dir(scan)
     from .progress import StageProgress
 
     with StageProgress(enabled=not quiet and not as_json) as progress:
-        result = api.run(scan, annotations=annotations, output=out, force=force, progress=progress.update, **params)
+        extra: dict[str, Any] = {"rooms": rooms} if rooms is not None else {}  # given only when used
+        result = api.run(scan, annotations=annotations, output=out, force=force, progress=progress.update, **extra, **params)
     if as_json:
         # the summary on stdout holds them; stderr says them too (as log warnings)
         for w in result.warnings:
             logging.getLogger("meshplan").warning(w)
-        typer.echo(json.dumps(result.summary(), indent=2))
+        typer.echo(json.dumps({**result.summary(), "envelope": _envelope(result)}, indent=2))
     elif not quiet:
         from .progress import print_summary
 
         print_summary(result)  # with the warnings, once
+        _print_envelope(result)
+
+
+def _envelope(result: Any) -> dict[str, Any]:
+    """The envelope summary of the summary (plan.json's ``envelope``, per orientation and in total)."""
+    from .export.gbxml import envelope_summary
+
+    env = envelope_summary(result, 2)
+    return {k: env[k] for k in ("north_deg", "orientations", "total")}
+
+
+def _print_envelope(result: Any) -> None:
+    """One line per facade orientation: exterior wall and window areas, window-to-wall ratio."""
+    env = _envelope(result)
+    parts = [
+        f"{o['orientation']} {o['wall_area']:.1f} m2 wall, {o['window_area']:.1f} m2 window, WWR {o['wwr']:.2f}" for o in env["orientations"] if o["walls"]
+    ]
+    if parts:
+        typer.echo(f"envelope (north {env['north_deg']:g} deg): " + "; ".join(parts), err=True)
 
 
 @app.command()
@@ -300,6 +341,9 @@ def batch(
         None, "--default-ceiling-height", help=_d("default_ceiling_height_m", "Ceiling height assumed when none is scanned (m).")
     ),
     ifc: bool = typer.Option(False, "--ifc", help="Also write model.ifc for every scan (IFC4; needs the ifc extra)."),
+    gbxml: bool = typer.Option(False, "--gbxml", help="Also write model.gbxml for every scan (gbXML 7.03 energy model)."),
+    idf: bool = typer.Option(False, "--idf", help="Also write model.idf for every scan (EnergyPlus; needs the energy extra)."),
+    osm: bool = typer.Option(False, "--osm", help="Also write model.osm for every scan (OpenStudio; needs the energy extra)."),
     annotations: Optional[str] = typer.Option(
         None, "--annotations", "-a",
         help=(
@@ -342,6 +386,9 @@ def batch(
         default_ceiling_height_m=default_ceiling_height,
         max_faces=max_faces,
         ifc=ifc or None,
+        gbxml=gbxml or None,
+        idf=idf or None,
+        osm=osm or None,
     )
     # several inputs (e.g. an unquoted glob the shell expanded) are concatenated, duplicates dropped
     scans = list(dict.fromkeys(p for spec in inputs for p in find_scans(spec, exclude=output, skip=exclude)))

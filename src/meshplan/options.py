@@ -13,8 +13,9 @@ import dataclasses
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
-from .errors import ParameterError
+from .errors import MeshplanError, ParameterError
 from .io.mesh import UNITS_M
+from .io.points import VOXEL_M
 from .orient.params import OrientParams
 from .plan.params import PlanParams
 from .render.params import RenderParams
@@ -24,11 +25,16 @@ from .validation import (
     Integer,
     Optional,
     Options,
+    Real,
     describe,
     unknown_name,
     validated,
 )
 from .walls.params import WallParams
+
+#: Bounds of ``point_voxel_m``, metres: a finer grid keeps laser noise and millions of points; a
+#: coarser one merges the two faces of a partition and blurs door jambs.
+MIN_VOXEL_M, MAX_VOXEL_M = 0.005, 0.2
 
 
 @validated
@@ -43,16 +49,37 @@ class InputParams:
     max_faces
         Refuse scans with more faces than this; ``None`` refuses only scans that cannot fit in
         the available memory.
+    point_voxel_m
+        Voxel size of the grid a point cloud is subsampled on before it is turned into splats
+        (:data:`meshplan.io.points.VOXEL_M`, 3 cm: coarser than laser spacing, finer than phone
+        spacing and than anything the stages look at).
     """
 
     _parameter_constraints: ClassVar[dict[str, Constraint]] = {
         "units": Options(tuple(UNITS_M)),
         # no upper bound: max_faces is how a user overrides the memory estimate on purpose
         "max_faces": Optional(Integer(1, None)),
+        "point_voxel_m": Real(
+            MIN_VOXEL_M, MAX_VOXEL_M, why="below 5 mm the grid keeps laser noise and millions of points; above 20 cm it merges the two faces of a wall"
+        ),
     }
 
     units: str = "m"
     max_faces: int | None = None
+    point_voxel_m: float = VOXEL_M
+
+
+#: Default site of the energy model: Chicago O'Hare airport (41.98 N, 87.92 W), the site of
+#: EnergyPlus's example files and weather data; set --site-lat/--site-lon for the real one.
+DEFAULT_SITE_LAT_DEG = 41.98
+DEFAULT_SITE_LON_DEG = -87.92
+
+#: Optional outputs -> (the module they need, the extra that installs it, the option to leave out).
+_EXTRAS = {
+    "ifc": ("ifcopenshell", "ifc", "--ifc"),
+    "idf": ("openstudio", "energy", "--idf"),
+    "osm": ("openstudio", "energy", "--osm"),
+}
 
 
 @validated
@@ -64,11 +91,50 @@ class ExportParams:
     ----------
     ifc
         Also write ``model.ifc`` (IFC4; needs the ``ifc`` extra, ifcopenshell).
+    gbxml
+        Also write ``model.gbxml`` (gbXML 7.03 energy model; no extra needed).
+    idf, osm
+        Also write ``model.idf`` (EnergyPlus) and ``model.osm`` (OpenStudio), translated from the
+        gbXML by OpenStudio (the ``energy`` extra).
+    site_lat_deg, site_lon_deg
+        Site of the energy model (degrees north and east; default Chicago O'Hare, the site of
+        EnergyPlus's example files).
+    north_deg
+        Compass bearing of plan -z, up the page (degrees clockwise from true north): 0 makes plan
+        -z north and +z south. Sets the facade orientations of the envelope summary.
+    window_type
+        gbXML type of the windows found (a scan cannot tell): operable or fixed.
     """
 
-    _parameter_constraints: ClassVar[dict[str, Constraint]] = {"ifc": Boolean()}
+    _parameter_constraints: ClassVar[dict[str, Constraint]] = {
+        "ifc": Boolean(),
+        "gbxml": Boolean(),
+        "idf": Boolean(),
+        "osm": Boolean(),
+        "site_lat_deg": Real(-90.0, 90.0, why="a latitude"),
+        "site_lon_deg": Real(-180.0, 180.0, why="a longitude"),
+        "north_deg": Real(-360.0, 360.0, why="a compass bearing"),
+        "window_type": Options(("operable", "fixed")),
+    }
 
     ifc: bool = False
+    gbxml: bool = False
+    idf: bool = False
+    osm: bool = False
+    site_lat_deg: float = DEFAULT_SITE_LAT_DEG
+    site_lon_deg: float = DEFAULT_SITE_LON_DEG
+    north_deg: float = 0.0
+    window_type: str = "operable"
+
+    def _check_together(self) -> None:
+        """An output whose optional dependency is missing is refused here, when the options are
+        made: before any scan is read (run, batch and the Python API alike)."""
+        from importlib.util import find_spec
+
+        for name, (module, extra, flag) in _EXTRAS.items():
+            if getattr(self, name) and find_spec(module) is None:
+                what = {"ifc": "IFC export", "idf": "EnergyPlus export", "osm": "OpenStudio export"}[name]
+                raise MeshplanError(f"{what} needs {module}, which is not installed", f"pip install 'meshplan[{extra}]', or leave out {flag}")
 
 
 _GROUPS = {

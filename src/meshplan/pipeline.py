@@ -16,11 +16,13 @@ from .io import LoadStats
 from .options import RunOptions
 from .orient import assign_faces
 from .plan import drafting, find_openings, find_rooms, pen_and_ink
+from .plan.elements import RoomEdit, mark_low_confidence, name_rooms, opening_elements, type_rooms, wall_elements
 from .result import PAPER_FACES, PAPER_TIMINGS_S, STAGES, Progress, Result, StoryPlans, _Timer
 from .updown import WEAK_SIGN_EVIDENCE, settle_up
 from .updown import up_by_doors as _up_by_doors
 from .updown import up_in_doubt as _up_in_doubt
 from .walls import find_flat_walls, physical_walls
+from .walls.physical import JOIN_REACH_M, join_walls
 
 log = logging.getLogger(__name__)
 
@@ -77,11 +79,14 @@ def compute(
     options: RunOptions,
     timer: _Timer | None = None,
     units_explicit: bool | None = None,
+    room_edits: tuple[RoomEdit, ...] = (),
 ) -> Result:
     """Run every computing stage on an already loaded mesh (input coordinates, metres).
 
     ``units_explicit`` says whether the user named the scan's units (``--units``); ``None``
-    takes any unit but the default ``m`` as named. Units, up axis and the building itself are
+    takes any unit but the default ``m`` as named. ``room_edits`` are the rooms of a rooms.json
+    (``--rooms``, :func:`meshplan.plan.elements.load_room_edits`) whose numbers, names and types
+    the matching rooms take. Units, up axis and the building itself are
     checked against the geometry (:func:`meshplan.plausibility.orient_plausibly`).
     """
     from .plausibility import orient_plausibly
@@ -106,6 +111,13 @@ def compute(
         else:
             openings = find_openings(plan_mesh, orientation, walls, options.plan, physical=physical)
         rooms = find_rooms(plan_mesh, orientation, walls, options.plan, options.orient.slab_tolerance_m)
+        # building elements: walls meeting at their centre lines, rooms numbered and named,
+        # what each wall and opening joins, types and confidences
+        physical = join_walls(physical, JOIN_REACH_M)
+        rooms = name_rooms(rooms, room_edits)
+        physical = wall_elements(physical, rooms, orientation.stories, options.walls.floor_reach_m, options.walls.ceiling_reach_m)
+        elements = opening_elements(openings, walls, physical, rooms, orientation.stories, plan_mesh)
+        rooms = type_rooms(rooms, elements, openings.kind, plan_mesh, orientation.stories)
     with timer.stage("slice_draw"):
         ann_story = assign_faces(plan_annotations.positions[:, 1], orientation.stories) if len(plan_annotations) else np.zeros(0, np.int64)
         plans = []
@@ -121,7 +133,7 @@ def compute(
                 StoryPlans(
                     story=story,
                     pen_and_ink=pen_and_ink(plan_mesh, orientation, story, options.plan, options.orient.slab_tolerance_m),
-                    drafting=drafting(walls, story, options.plan, openings.holes()),
+                    drafting=mark_low_confidence(drafting(walls, story, options.plan, openings.holes()), walls, physical, rooms, openings, elements),
                     annotations=story_ann,
                 )
             )
@@ -143,4 +155,5 @@ def compute(
         timings=timer.timings,
         warnings=tuple(warnings),
         annotation_story=ann_story,
+        opening_elements=elements,
     )

@@ -23,6 +23,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from .options import RunOptions
     from .orient import Orientation, Story
     from .plan import DraftingPlan, Openings, PenAndInkPlan, Room
+    from .plan.elements import OpeningElement
     from .walls import FlatWalls, PhysicalWall
 
 #: The stage timings are logged on the package's logger ("DEBUG meshplan: stage orient: ..."
@@ -77,7 +78,8 @@ class Result:
     rooms, openings
         Rooms of every story; doors and windows in the walls.
     physical_walls
-        The wall faces paired into walls with a thickness.
+        The wall faces paired into walls with a thickness, their centre lines joined at corners
+        and T junctions, with the rooms on each side and a confidence.
     stories
         The plans of each story.
     timings
@@ -90,6 +92,9 @@ class Result:
         Things the user should know.
     annotation_story
         The story of each annotation (read-only).
+    opening_elements
+        Per opening (row of ``openings``): its physical wall, clear sizes, the rooms it
+        connects, its leaf and a confidence (:class:`meshplan.plan.elements.OpeningElement`).
     """
 
     input: LoadStats
@@ -107,6 +112,7 @@ class Result:
     files: tuple[str, ...] = ()
     warnings: tuple[str, ...] = ()
     annotation_story: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    opening_elements: tuple[OpeningElement, ...] = ()
 
     def __post_init__(self) -> None:
         # a copy of each: the timer and the caller keep theirs
@@ -128,7 +134,12 @@ class Result:
             "faces": self.input.faces,
             "stories": [s.story.to_dict(3) for s in self.stories],
             "walls": len(self.walls),
-            "rooms": [{"label": r.label, "story": r.story, "area": round(r.area, 2)} for r in self.rooms],
+            "physical_walls": len(self.physical_walls),
+            "rooms": [
+                {"label": r.label, "story": r.story, "area": round(r.area, 2), **({"number": r.number, "type": r.type} if r.number else {})}
+                for r in self.rooms
+            ],
+            # each opening once: the openings are one per physical opening (both faces merged)
             "doors": sum(k == "door" for k in self.openings.kind),
             "windows": sum(k == "window" for k in self.openings.kind),
             "annotations": len(self.annotations),

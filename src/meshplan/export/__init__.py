@@ -299,6 +299,16 @@ def render_files(result: Result, timer: _Timer | None = None, pool: RenderPool |
                 from .ifc import ifc_bytes
 
                 files["model.ifc"] = ifc_bytes(result)
+            export = result.options.export
+            if export.gbxml or export.idf or export.osm:
+                from .energy import energy_files
+                from .gbxml import energy_model, gbxml_bytes
+
+                model = energy_model(result)
+                gbxml = gbxml_bytes(result, model)
+                if export.gbxml:
+                    files["model.gbxml"] = gbxml
+                files.update(energy_files(result, export.idf, export.osm, model, gbxml))
             for sp in result.stories:
                 files.update(_model_files(result, sp.story.index))
             files["oriented.glb"] = glb_bytes(result.mesh, result.annotations, "scan")

@@ -23,6 +23,7 @@ LAYERS = {
     "DIMENSIONS": 8,
     "DOORS": 30,  # orange
     "WINDOWS": 5,  # blue
+    "LOW_CONFIDENCE": 1,  # red, dashed: rooms meshplan is unsure of (closed by the floor)
 }
 
 
@@ -42,7 +43,7 @@ def drafting_dxf(
     ``slice_segments`` (the scan cut at the same height, for reference) on SLICES, annotations
     as circles and probe lines on ANNOTATIONS and their labels on TEXT; with ``symbols``
     (:class:`meshplan.plan.symbols.PlanSymbols`) and ``rooms``, room outlines and labels on
-    ROOMS, DIMENSION entities on DIMENSIONS, door leaves and swings on DOORS and window sashes
+    ROOMS (low-confidence rooms dashed on LOW_CONFIDENCE), DIMENSION entities on DIMENSIONS, door leaves and swings on DOORS and window sashes
     on WINDOWS.
 
     Segments are ``(S, 2, 2)`` arrays of plan points [x, z] in metres.
@@ -55,7 +56,7 @@ def drafting_dxf(
     doc.header["$MEASUREMENT"] = 1
     doc.header["$INSUNITS"] = units.M
     for name, color in LAYERS.items():
-        doc.layers.add(name, color=color)
+        doc.layers.add(name, color=color, linetype="DASHED" if name == "LOW_CONFIDENCE" else "Continuous")
     msp = doc.modelspace()
     for seg in np.asarray(wall_segments).reshape(-1, 2, 2):
         msp.add_line(_p(seg[0]), _p(seg[1]), dxfattribs={"layer": "WALLS", "lineweight": 50})
@@ -73,7 +74,9 @@ def drafting_dxf(
         msp.add_text(_literal_text(f"{label} ({kind})"), height=0.12, dxfattribs={"layer": "TEXT"}).set_placement((c[0] + 0.1, c[1] + 0.1))
     for room in rooms:
         outline = [_p(c) for c in list(room.polygon.exterior.coords)[:-1]]
-        msp.add_lwpolyline(outline, close=True, dxfattribs={"layer": "ROOMS"})
+        # a low-confidence room (a wall missing: closed by the scanned floor) on its own dashed layer
+        low = getattr(room, "confidence", "") == "low"
+        msp.add_lwpolyline(outline, close=True, dxfattribs={"layer": "LOW_CONFIDENCE" if low else "ROOMS", "linetype": "DASHED" if low else "BYLAYER"})
     if symbols is not None:
         for seg in symbols.door_leaves:
             msp.add_line(_p(seg[0]), _p(seg[1]), dxfattribs={"layer": "DOORS"})

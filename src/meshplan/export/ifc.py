@@ -4,8 +4,15 @@ The model holds an IfcProject, IfcSite and IfcBuilding; an IfcBuildingStorey per
 floor height; an IfcWall per physical wall (:mod:`meshplan.walls.physical`: thickness measured
 where both faces were scanned, else the stated default) from floor to ceiling; an IfcSpace per room
 (its floor polygon extruded to the ceiling, with its net floor area in Qto_SpaceBaseQuantities);
-an IfcDoor or IfcWindow in an IfcOpeningElement that voids its wall, once per physical opening;
-and the annotations as IfcSensor (sensors and thermostats) or IfcAnnotation (the others).
+an IfcDoor or IfcWindow in an IfcOpeningElement that voids its wall, once per physical opening
+(referenced by the spaces it connects); and the annotations, each contained in the IfcSpace it
+belongs to (the room its probe points into), placed at its point with its local x along its
+probe: a thermostat as an IfcUnitaryControlElement (THERMOSTAT) aggregating the IfcSensor
+(TEMPERATURESENSOR) it implies, a sensor as an IfcSensor typed by what its label says it
+measures (:func:`sensor_type`), a door or window mark as the detected IfcDoor or IfcWindow it
+marks (tagged with its label and referenced by its space), or as its own element where none was
+detected, anything else as an IfcAnnotation. Every user mark keeps its label, position and
+probe in a ``meshplan_annotation`` property set.
 
 IFC is z-up: plan point (x, y, z) is IFC point (x, -z, y), a rotation, so the model is the plan
 frame turned upright; seen from above it looks like the drawings.
@@ -78,29 +85,59 @@ def ifc_bytes(result: Result) -> bytes:
         storeys[s.index] = (st, s)
 
     # walls
+    room_no = [r.number or r.label for r in result.rooms]
     ifc_walls: list[Any] = []  # ifcopenshell entity instances
     for pw in result.physical_walls:
         st, s = storeys[pw.story]
-        wall = root.create_entity(f, ifc_class="IfcWall", name=f"Wall {len(ifc_walls) + 1}")
+        wall = root.create_entity(f, ifc_class="IfcWall", name=f"Wall {len(ifc_walls) + 1}", predefined_type="STANDARD")
         rep = geometry.add_wall_representation(f, context=body, length=pw.length, height=s.height, thickness=pw.thickness, offset=-pw.thickness / 2)
         geometry.assign_representation(f, product=wall, representation=rep)
         geometry.edit_object_placement(f, product=wall, matrix=_placement(pw.start, s.floor, pw.direction))
         spatial.assign_container(f, products=[wall], relating_structure=st)
         ps = pset.add_pset(f, product=wall, name="Pset_WallCommon")
-        pset.edit_pset(f, pset=ps, properties={"IsExternal": False, "Reference": "meshplan"})
+        pset.edit_pset(f, pset=ps, properties={"IsExternal": bool(pw.exterior), "Reference": "meshplan"})
         ps = pset.add_pset(f, product=wall, name="meshplan")
-        pset.edit_pset(f, pset=ps, properties={"faces": ",".join(str(i) for i in pw.faces), "thickness_measured": pw.paired})
+        props: dict[str, Any] = {"faces": ",".join(str(i) for i in pw.faces), "thickness_measured": pw.paired}
+        if pw.confidence:
+            props.update(confidence=pw.confidence, confidence_reason=pw.confidence_reason)
+        for side, rooms in zip(("rooms_front", "rooms_back"), pw.rooms):
+            if rooms:
+                props[side] = ",".join(room_no[k] for k in rooms)
+        pset.edit_pset(f, pset=ps, properties=props)
         qto = pset.add_qto(f, product=wall, name="Qto_WallBaseQuantities")
         pset.edit_qto(f, qto=qto, properties={"Length": pw.length, "Width": pw.thickness, "Height": s.height})
         ifc_walls.append(wall)
+
+    # rooms
+    spaces: list[Any] = []
+    for room in result.rooms:
+        st, s = storeys[room.story]
+        space = root.create_entity(f, ifc_class="IfcSpace", name=room.number or room.label, predefined_type="INTERNAL")
+        space.LongName = room.label
+        space.ObjectType = room.type
+        pts = [_ifc_xy(p) for p in list(room.polygon.exterior.coords)[:-1]]
+        rep = geometry.add_slab_representation(f, context=body, depth=s.height, polyline=pts + [pts[0]])
+        geometry.assign_representation(f, product=space, representation=rep)
+        geometry.edit_object_placement(f, product=space, matrix=_placement((0.0, 0.0), float(s.floor)))
+        aggregate.assign_object(f, products=[space], relating_object=st)
+        qto = pset.add_qto(f, product=space, name="Qto_SpaceBaseQuantities")
+        pset.edit_qto(f, qto=qto, properties={"NetFloorArea": room.area, "GrossFloorArea": room.area, "Height": s.height})
+        if room.confidence:
+            ps = pset.add_pset(f, product=space, name="meshplan")
+            props = {"number": room.number, "type": room.type, "closed_by": room.closed_by}
+            props.update(confidence=room.confidence, confidence_reason=room.confidence_reason)
+            pset.edit_pset(f, pset=ps, properties=props)
+        spaces.append(space)
 
     # doors and windows, once per physical opening
     from ..walls.physical import wall_of_face
 
     carrier = wall_of_face(result.physical_walls, len(result.walls))
     ops = result.openings
+    elements = result.opening_elements
     centers = ops.center(result.walls) if len(ops) else np.zeros((0, 2))
     placed: list[tuple[int, np.ndarray]] = []
+    fills: dict[int, Any] = {}  # opening row -> its IfcDoor or IfcWindow
     counts = {"door": 0, "window": 0}
     for i in range(len(ops)):
         w = int(carrier[ops.wall[i]])
@@ -112,37 +149,42 @@ def ifc_bytes(result: Result) -> bytes:
         pw = result.physical_walls[w]
         kind = ops.kind[i]
         counts[kind] += 1
+        el = elements[i] if i < len(elements) else None
         width, height = float(ops.width[i]), float(ops.top[i] - ops.bottom[i])
         d = pw.direction
         u_center = float(np.dot(centers[i] - np.asarray(pw.start), d))
         origin = np.asarray(pw.start) + (u_center - width / 2) * d
-        opening = root.create_entity(f, ifc_class="IfcOpeningElement", name=f"{kind} opening {counts[kind]}")
+        opening = root.create_entity(f, ifc_class="IfcOpeningElement", name=f"{kind} opening {counts[kind]}", predefined_type="OPENING")
         rep = geometry.add_wall_representation(f, context=body, length=width, height=height, thickness=pw.thickness + 0.1, offset=-(pw.thickness + 0.1) / 2)
         geometry.assign_representation(f, product=opening, representation=rep)
         geometry.edit_object_placement(f, product=opening, matrix=_placement(origin, float(ops.bottom[i]), d))
         feature.add_feature(f, feature=opening, element=ifc_walls[w])
-        fill = root.create_entity(f, ifc_class="IfcDoor" if kind == "door" else "IfcWindow", name=f"{kind.capitalize()} {counts[kind]}")
+        fill = root.create_entity(
+            f, ifc_class="IfcDoor" if kind == "door" else "IfcWindow", name=f"{kind.capitalize()} {counts[kind]}", predefined_type=kind.upper()
+        )
         fill.OverallWidth, fill.OverallHeight = width, height
+        if kind == "door":
+            fill.OperationType = _door_operation(el)
         rep = geometry.add_wall_representation(f, context=body, length=width, height=height, thickness=0.05, offset=-0.025)
         geometry.assign_representation(f, product=fill, representation=rep)
         geometry.edit_object_placement(f, product=fill, matrix=_placement(origin, float(ops.bottom[i]), d))
         feature.add_filling(f, opening=opening, element=fill)
         spatial.assign_container(f, products=[fill], relating_structure=storeys[int(ops.story[i])][0])
+        if el is not None:
+            ps = pset.add_pset(f, product=fill, name="meshplan")
+            props = {"clear_width": el.clear_width, "height": el.height, "confidence": el.confidence, "confidence_reason": el.confidence_reason}
+            props["connects"] = ",".join(_room_ref(x, room_no) for x in el.connects)
+            if el.sill is not None:
+                props["sill"] = el.sill
+            if el.opens_to is not None:
+                props["opens_to"] = _room_ref(el.opens_to, room_no)
+            pset.edit_pset(f, pset=ps, properties=props)
+            # the spaces on either side see the door or window (referenced, not contained)
+            for x in sorted({x for x in el.connects if isinstance(x, int)}):
+                spatial.reference_structure(f, products=[fill], relating_structure=spaces[x])
+        fills[i] = fill
 
-    # rooms
-    for room in result.rooms:
-        st, s = storeys[room.story]
-        space = root.create_entity(f, ifc_class="IfcSpace", name=room.label)
-        space.LongName = room.label
-        pts = [_ifc_xy(p) for p in list(room.polygon.exterior.coords)[:-1]]
-        rep = geometry.add_slab_representation(f, context=body, depth=s.height, polyline=pts + [pts[0]])
-        geometry.assign_representation(f, product=space, representation=rep)
-        geometry.edit_object_placement(f, product=space, matrix=_placement((0.0, 0.0), float(s.floor)))
-        aggregate.assign_object(f, products=[space], relating_object=st)
-        qto = pset.add_qto(f, product=space, name="Qto_SpaceBaseQuantities")
-        pset.edit_qto(f, qto=qto, properties={"NetFloorArea": room.area, "GrossFloorArea": room.area, "Height": s.height})
-
-    # annotations
+    # annotations, in the space that holds them (or their storey), along their probe
     ann = result.annotations
     for i, (label, kind) in enumerate(zip(ann.labels, ann.kinds)):
         # the user's text as it is, without the characters STEP cannot encode (lone surrogates)
@@ -150,18 +192,148 @@ def ifc_bytes(result: Result) -> bytes:
         # within IfcLabel's 255 characters
         label = plain_text(label)
         story = int(result.annotation_story[i]) if len(result.annotation_story) else 0
-        if kind in ("sensor", "thermostat"):
-            el = root.create_entity(f, ifc_class="IfcSensor", name=label, predefined_type="TEMPERATURESENSOR" if kind == "thermostat" else "NOTDEFINED")
-        else:
-            el = root.create_entity(f, ifc_class="IfcAnnotation", name=label)
-        el.ObjectType = kind
         p = ann.positions[i]
         d = ann.directions[i]
-        direction = (d[0], d[2]) if np.all(np.isfinite(d)) and np.hypot(d[0], d[2]) > 1e-6 else (1.0, 0.0)
-        geometry.edit_object_placement(f, product=el, matrix=_placement((p[0], p[2]), float(p[1]), direction))
-        spatial.assign_container(f, products=[el], relating_structure=storeys[story][0])
+        has_probe = bool(np.all(np.isfinite(d)) and np.linalg.norm(d) > 1e-6)
+        direction = (d[0], d[2]) if has_probe and np.hypot(d[0], d[2]) > 1e-6 else (1.0, 0.0)
+        matrix = _placement((p[0], p[2]), float(p[1]), direction)
+        home = annotation_room(result, i)
+        where = spaces[home] if home is not None else storeys[story][0]
+        if kind in ("door", "window"):
+            target = _marked_opening(result, i, fills)
+            if target is not None:  # the user's mark names the element that was found
+                marked = fills[target]
+                marked.Tag = label
+                _annotation_pset(f, pset, marked, label, kind, p, d if has_probe else None, detected=True)
+                if home is not None:
+                    spatial.reference_structure(f, products=[marked], relating_structure=spaces[home])
+                continue
+            item = root.create_entity(f, ifc_class="IfcDoor" if kind == "door" else "IfcWindow", name=label, predefined_type=kind.upper())
+            item.Tag = label
+        elif kind == "thermostat":
+            item = root.create_entity(f, ifc_class="IfcUnitaryControlElement", name=label, predefined_type="THERMOSTAT")
+        elif kind == "sensor":
+            item = root.create_entity(f, ifc_class="IfcSensor", name=label, predefined_type=sensor_type(label))
+        else:
+            item = root.create_entity(f, ifc_class="IfcAnnotation", name=label)
+        item.ObjectType = kind
+        geometry.edit_object_placement(f, product=item, matrix=matrix)
+        spatial.assign_container(f, products=[item], relating_structure=where)
+        _annotation_pset(f, pset, item, label, kind, p, d if has_probe else None, detected=kind not in ("door", "window"))
+        if kind == "thermostat":
+            # a thermostat measures the temperature where it hangs: its sensor is a part of it
+            sensor = root.create_entity(f, ifc_class="IfcSensor", name=f"{label} sensor", predefined_type="TEMPERATURESENSOR")
+            sensor.ObjectType = "thermostat sensor"
+            geometry.edit_object_placement(f, product=sensor, matrix=matrix)
+            aggregate.assign_object(f, products=[sensor], relating_object=item)
     _make_deterministic(f)
     return f.to_string().encode("utf-8")
+
+
+#: A door or window annotation marks the detected opening of its kind whose span, on its wall,
+#: passes within this distance (m) of the mark: users click the leaf or the frame, up to a
+#: wall's thickness and a hand's width off the opening's line.
+MARK_REACH_M = 0.4
+
+#: An annotation belongs to the room its probe points into, looked for this far (m) along it
+#: (sensors hang on walls, which room polygons stop at), else to the room nearest to it within
+#: :data:`ROOM_REACH_M`.
+PROBE_STEP_M = 0.3
+ROOM_REACH_M = 0.5
+
+#: Words in a sensor's label that say what it measures -> IfcSensorTypeEnum (checked in order,
+#: as whole words or prefixes of them, case-insensitively).
+SENSOR_WORDS = (
+    (("co2", "carbon dioxide"), "CO2SENSOR"),
+    (("co", "carbon monoxide"), "COSENSOR"),
+    (("temp", "temperature", "thermo"), "TEMPERATURESENSOR"),
+    (("humid", "rh", "moisture"), "HUMIDITYSENSOR"),
+    (("light", "lux", "illum"), "LIGHTSENSOR"),
+    (("motion", "occupancy", "presence", "pir", "movement"), "MOVEMENTSENSOR"),
+    (("smoke",), "SMOKESENSOR"),
+    (("sound", "noise", "acoustic"), "SOUNDSENSOR"),
+    (("pressure",), "PRESSURESENSOR"),
+    (("contact", "reed"), "CONTACTSENSOR"),
+    (("voc", "gas"), "GASSENSOR"),
+    (("flow",), "FLOWSENSOR"),
+)
+
+
+def sensor_type(label: str) -> str:
+    """The IfcSensorTypeEnum a sensor's label names (:data:`SENSOR_WORDS`), else NOTDEFINED."""
+    import re
+
+    words = re.findall(r"[a-z0-9]+", label.lower())
+    text = " ".join(words)
+    for keys, kind in SENSOR_WORDS:
+        for key in keys:
+            if " " in key and key in text:
+                return kind
+            if any(w == key or (len(key) >= 4 and w.startswith(key)) for w in words):
+                return kind
+    return "NOTDEFINED"
+
+
+def annotation_room(result: Result, i: int) -> int | None:
+    """Index of the room annotation ``i`` belongs to (:data:`PROBE_STEP_M`), or ``None``."""
+    from shapely.geometry import Point
+
+    story = int(result.annotation_story[i]) if len(result.annotation_story) else 0
+    p = result.annotations.positions[i]
+    d = result.annotations.directions[i]
+    here = np.array([p[0], p[2]], dtype=np.float64)
+    probe = np.array([d[0], d[2]], dtype=np.float64) if np.all(np.isfinite(d)) else np.zeros(2)
+    spots = [here + PROBE_STEP_M * probe / np.linalg.norm(probe)] if np.linalg.norm(probe) > 1e-6 else []
+    mine = [k for k, r in enumerate(result.rooms) if r.story == story]
+    for spot in [*spots, here]:
+        for k in mine:
+            if result.rooms[k].polygon.contains(Point(spot)):
+                return k
+    if not mine:
+        return None
+    k = min(mine, key=lambda j: result.rooms[j].polygon.distance(Point(here)))
+    return k if result.rooms[k].polygon.distance(Point(here)) <= ROOM_REACH_M else None
+
+
+def _marked_opening(result: Result, i: int, fills: dict[int, Any]) -> int | None:
+    """The opening row (with an IFC element in ``fills``) that door or window annotation ``i``
+    marks (:data:`MARK_REACH_M`), or ``None``."""
+    ops, walls = result.openings, result.walls
+    kind = result.annotations.kinds[i]
+    story = int(result.annotation_story[i]) if len(result.annotation_story) else 0
+    p = result.annotations.positions[i]
+    q = np.array([p[0], p[2]])
+    best, best_d = None, MARK_REACH_M
+    for k in fills:
+        if ops.kind[k] != kind or int(ops.story[k]) != story:
+            continue
+        w = int(ops.wall[k])
+        t, n, off = walls.tangent[w], walls.normal[w], walls.offset[w]
+        u = float(np.clip(q @ t, ops.u_min[k], ops.u_max[k]))
+        dist = float(np.linalg.norm(q - (u * t + off * n)))
+        if dist <= best_d:
+            best, best_d = k, dist
+    return best
+
+
+def _room_ref(x: Any, numbers: list[str]) -> str:
+    return numbers[x] if isinstance(x, int) else "outside" if x == "outside" else "unknown"
+
+
+def _door_operation(el: Any) -> str:
+    """IfcDoorTypeOperationEnum of a door from the leaf seen in the scan."""
+    if el is None or el.swing is None:
+        return "NOTDEFINED"
+    return "SINGLE_SWING_LEFT" if el.swing.hand == "left" else "SINGLE_SWING_RIGHT"
+
+
+def _annotation_pset(f, pset, el, label: str, kind: str, p, d, detected: bool) -> None:
+    """The user's mark on ``el``: label, kind, position and probe (IFC coordinates: x, -z, y)."""
+    ps = pset.add_pset(f, product=el, name="meshplan_annotation")
+    props: dict[str, Any] = {"label": label, "kind": kind, "x": float(p[0]), "y": float(-p[2]), "z": float(p[1]), "detected": detected}
+    if d is not None:
+        props.update(probe_x=float(d[0]), probe_y=float(-d[2]), probe_z=float(d[1]))
+    pset.edit_pset(f, pset=ps, properties=props)
 
 
 def _make_deterministic(f) -> None:
@@ -181,6 +353,8 @@ def _make_deterministic(f) -> None:
     f.header.file_name.time_stamp = "2000-01-01T00:00:00"
     # ifcopenshell gathers related elements in a set: order them by entity id
     for rel in f.by_type("IfcRelContainedInSpatialStructure"):
+        rel.RelatedElements = sorted(rel.RelatedElements, key=lambda e: e.id())
+    for rel in f.by_type("IfcRelReferencedInSpatialStructure"):
         rel.RelatedElements = sorted(rel.RelatedElements, key=lambda e: e.id())
     for rel in f.by_type("IfcRelAggregates"):
         rel.RelatedObjects = sorted(rel.RelatedObjects, key=lambda e: e.id())

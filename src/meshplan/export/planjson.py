@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .._version import __version__
+from .gbxml import envelope_summary
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..result import Result
@@ -55,13 +56,18 @@ def plan_document(result: Result) -> dict[str, Any]:
             }
             for d in o.alignment.directions
         ],
-        "walls": result.walls.to_list(_NC),
+        "walls": [dict(w, physical_wall=int(k)) if k >= 0 else w for w, k in zip(result.walls.to_list(_NC), _carriers(result))],
+        "physical_walls": [_physical_wall(w, result) for w in result.physical_walls],
         "rooms": [r.to_dict(_NC, imperial=result.options.render.imperial) for r in result.rooms],
-        "openings": result.openings.to_list(result.walls, _NC),
+        "openings": [
+            dict(o, **(result.opening_elements[i].to_dict(_NC) if i < len(result.opening_elements) else {}))
+            for i, o in enumerate(result.openings.to_list(result.walls, _NC))
+        ],
         "annotations": [
             dict(item, story=int(result.annotation_story[i]))
             for i, item in enumerate(result.annotations.to_list(_NC))
         ],
+        "envelope": envelope_summary(result, _NC),
         "levels": {
             "bucket_m": round(float(result.options.orient.level_bucket_m), _ND),
             "spikes": [{"height": round(s.height, _NC), "area": round(s.weight, 3)} for s in o.levels.spikes],
@@ -92,6 +98,37 @@ def plan_document(result: Result) -> dict[str, Any]:
         "timings": {k: round(float(v), 4) for k, v in result.timings.items()},
     }
     return doc
+
+
+def _carriers(result: Result) -> list[int]:
+    """The physical wall of every flat wall face (-1 for none)."""
+    from ..walls.physical import wall_of_face
+
+    return [int(k) for k in wall_of_face(result.physical_walls, len(result.walls))]
+
+
+def _physical_wall(w: Any, result: Result) -> dict[str, Any]:
+    """One physical wall (:class:`meshplan.walls.PhysicalWall`) as plan.json lists it."""
+    story = result.orientation.stories[w.story]
+    d: dict[str, Any] = {
+        "story": int(w.story),
+        "start": _r(w.start),
+        "end": _r(w.end),
+        "normal": _r(w.normal, _ND),
+        "length": round(float(w.length), _NC),
+        "thickness": round(float(w.thickness), _NC),
+        "thickness_measured": bool(w.paired),
+        "height": round(float(story.height), _NC),
+        "scanned_bottom": round(float(w.bottom), _NC),
+        "scanned_top": round(float(w.top), _NC),
+        "faces": [int(f) for f in w.faces],
+        "joined": _r(w.joined),
+        "exterior": w.exterior,
+        "rooms": [list(w.rooms[0]), list(w.rooms[1])],
+    }
+    if w.confidence:
+        d["confidence"] = {"level": w.confidence, "reason": w.confidence_reason}
+    return d
 
 
 def dumps(doc: dict[str, Any]) -> str:

@@ -144,6 +144,7 @@ def _stories(result: Result, files: dict[str, bytes], doc: dict[str, Any]) -> li
             name = f"{kind}-{i}.svg"
             svg = inline_svg(files[name], f"{kind}-{i}", f"{title}, story {i}") if name in files else None
             plans.append({"kind": kind, "title": title, "name": name, "svg": svg})
+        envelope = [f for f in (doc.get("envelope") or {}).get("facades", []) if f.get("story") == i and f.get("walls")]
         story_rooms = [r for r in rooms if r.get("story", 0) == i]
         story_openings = [op for op in openings if op.get("story", 0) == i]
         out.append(
@@ -154,6 +155,11 @@ def _stories(result: Result, files: dict[str, bytes], doc: dict[str, Any]) -> li
                 "rooms": [[r.get("label", ""), _num(r.get("area"), 2), _num(r.get("width"), 2), _num(r.get("depth"), 2)] for r in story_rooms],
                 "rooms_total": f"{sum(float(r.get('area') or 0.0) for r in story_rooms):,.2f}",
                 "openings": _generic_table(story_openings) if story_openings else None,
+                "envelope": [
+                    [f["orientation"], f["walls"], _num(f["wall_area"], 2), f["windows"], _num(f["window_area"], 2), f["doors"]]
+                    + [_num(f["door_area"], 2), _num(f["wwr"], 3)]
+                    for f in envelope
+                ],
             }
         )
     return out
@@ -191,6 +197,60 @@ def _input_rows(result: Result, doc: dict[str, Any]) -> list[list[Any]]:
     rows = [[k.replace("_", " "), _num(v, 6) if not isinstance(v, str) else v] for k, v in doc["input"].items()]
     rows.insert(3, ["metres per unit", _num(result.input.scale_to_m, 6)])
     return rows
+
+
+#: Colour of the energy model's layers in the 3D view (its exterior surfaces; interior ones
+#: lighter): the surfaces of model.gbxml, shown without their roofs and ceilings like the scan.
+ENERGY_EXTERIOR_HEX = "#d9822b"
+ENERGY_INTERIOR_HEX = "#8fb8de"
+
+
+def _energy_layers(result: Result) -> tuple[ViewMesh, ...]:
+    """The energy model's walls and floors (model.gbxml's surfaces, derived from the rooms) as
+    layers of the 3D view, one per story and kind (exterior, interior), hidden at first."""
+    import shapely
+
+    from ..geometry import Mesh
+    from .gbxml import energy_model
+
+    model = energy_model(result)
+    groups: dict[tuple[int, bool], tuple[list[np.ndarray], list[np.ndarray]]] = {}
+    for s in model.surfaces:
+        if s.kind in ("Roof", "Ceiling"):
+            continue
+        verts, faces = groups.setdefault((s.story, s.exposed), ([], []))
+        base = sum(len(v) for v in verts)
+        p = s.polygon
+        if s.is_wall or len(p) == 3:
+            tris = np.array([[0, k, k + 1] for k in range(1, len(p) - 1)])
+            pts = p
+        else:  # a floor may be concave: triangulated within its outline
+            tri = shapely.constrained_delaunay_triangles(shapely.Polygon(p[:, :2]))
+            corners = [np.asarray(t.exterior.coords)[:3] for t in shapely.get_parts(tri)]
+            pts = np.array([[*c, p[0, 2]] for t in corners for c in t]) if corners else np.zeros((0, 3))
+            tris = np.arange(len(pts)).reshape(-1, 3)
+        verts.append(pts[:, [0, 2, 1]] * np.array([1.0, 1.0, -1.0]))  # gbXML (x, y, z) -> plan (x, z, -y)
+        faces.append(tris + base)
+    layers = []
+    for (story, exposed), (verts, faces) in sorted(groups.items()):
+        if not verts:
+            continue
+        mesh = Mesh(np.concatenate(verts), np.concatenate(faces))
+        name = f"story {story}: energy model, {'exterior' if exposed else 'interior and ground'} surfaces"
+        layers.append(ViewMesh(name, "energy-exterior" if exposed else "energy-interior", story, mesh, mesh.n_faces))
+    return tuple(layers)
+
+
+def _with_energy_colors(data: dict[str, Any], view: ViewMeshes) -> dict[str, Any]:
+    """The page's data with the energy layers' colours, and the face counts of the scan's own
+    layers (``view``), which the energy layers are not part of."""
+    data["faces_shown"], data["faces_total"] = view.faces_shown, view.faces_total
+    for m in data.get("meshes", []):
+        if m.get("role") == "energy-exterior":
+            m["color"] = ENERGY_EXTERIOR_HEX
+        elif m.get("role") == "energy-interior":
+            m["color"] = ENERGY_INTERIOR_HEX
+    return data
 
 
 def _asset(name: str) -> str:
@@ -231,6 +291,8 @@ def report_html(result: Result, files: dict[str, bytes], *, max_faces: int = MAX
 
     doc = plan_document(result)
     view = view_meshes(result, max_faces)
+    # the energy model's layers are drawn too, but are no faces of the scan (the note counts those)
+    shown = ViewMeshes(view.layers + _energy_layers(result), view.max_faces)
     if view.decimated:
         faces_note = (
             f"Showing {view.faces_shown:,} of {view.faces_total:,} faces: a fixed subsample of whole faces keeps "
@@ -259,6 +321,7 @@ def report_html(result: Result, files: dict[str, bytes], *, max_faces: int = MAX
         kinds=list(ANNOTATION_KINDS),
         units=result.input.units,
         stories=_stories(result, files, doc),
+        north_deg=f"{result.options.export.north_deg:g}",
         other_rooms=_generic_table(rooms) if rooms and not any(r.get("story", 0) in indices for r in rooms) else None,
         levels=_figure(files, "levels.png", "altitude histogram"),
         normals=_figure(files, "normals.png", "normals heat map"),
@@ -270,7 +333,7 @@ def report_html(result: Result, files: dict[str, bytes], *, max_faces: int = MAX
             [group, name, json.dumps(value, sort_keys=True)] for group, params in result.options.to_dict().items() for name, value in params.items()
         ],
         css=Markup(_asset("report.css")),
-        data=_json_script(page_data(result, view)),
+        data=_json_script(_with_energy_colors(page_data(result, shown), view)),
         plotly=_script(plotly.offline.get_plotlyjs()),
         script=_script(_asset("report.js")),
     )

@@ -51,7 +51,16 @@ class Room:
     story: int
     label: str
     polygon: Polygon
-    closed_by: str  # "walls" or "floor"
+    closed_by: str  # "walls", "extension" or "floor"
+    #: set by :mod:`meshplan.plan.elements`: the number in reading order per story ("0.01"),
+    #: the name (the user's from rooms.json, else the label), the type (room, corridor, stair,
+    #: closet, open) and why, and how sure the room is (high, medium, low) and why
+    number: str = ""
+    name: str = ""
+    type: str = "room"
+    type_reason: str = ""
+    confidence: str = ""
+    confidence_reason: str = ""
 
     @property
     def area(self) -> float:
@@ -80,6 +89,10 @@ class Room:
             "depth": round(self.depth, ndigits),
             "closed_by": self.closed_by,
         }
+        if self.number:
+            d.update(number=self.number, name=self.name or self.label, type=self.type, type_reason=self.type_reason)
+        if self.confidence:
+            d["confidence"] = {"level": self.confidence, "reason": self.confidence_reason}
         if imperial:
             d["area_ft2"] = round(self.area / FOOT_M**2, 2)
         return d

@@ -6,6 +6,7 @@ import numpy as np
 
 from ..geometry import Annotations
 from ..plan import DraftingPlan, PenAndInkPlan
+from ..plan.elements import MarkedDrafting
 from ..plan.symbols import PlanSymbols
 from ..validation import PLAIN_TEXT_KW, plain_text
 from ..walls import FlatWalls
@@ -16,6 +17,10 @@ WALL_COLOR = "#111111"
 DIM_COLOR = "#6a6a6a"
 ROOM_TINT = "#eef3f8"
 ROOM_EDGE = "#8aa0b8"
+#: Low-confidence walls, rooms and openings (``plan.elements.MarkedDrafting``) are drawn dashed
+#: in this colour, as RoomPlan draws what it is unsure of, so that a reader checks them.
+LOW_CONFIDENCE_COLOR = "#c0392b"
+LOW_CONFIDENCE_DASH = (0, (4, 2.5))
 #: Saturated colours for wall segments (no greys: grey marks the segments that were dropped).
 SEGMENT_COLORS = (
     "#e6194b", "#3cb44b", "#4363d8", "#f58231", "#911eb4", "#42d4f4", "#f032e6", "#9a6324",
@@ -66,7 +71,11 @@ def drafting_figure(
     cut = plan.height - s.floor
     fig, ax = new_figure(sheet, _story_title(f"Drafting (cut at {cut:.2f} m)", s.index, n_stories, s.floor, s.ceiling, params.imperial), params)
     # list(): the stubs want a Sequence of segments, an (S, 2, 2) array iterates the same
-    ax.add_collection(LineCollection(list(plan.slices.segments), colors=WALL_COLOR, linewidths=1.6, capstyle="projecting", zorder=3))
+    # a MarkedDrafting sets its low-confidence walls apart: drawn dashed
+    solid = plan.solid if isinstance(plan, MarkedDrafting) else plan.slices.segments
+    ax.add_collection(LineCollection(list(solid), colors=WALL_COLOR, linewidths=1.6, capstyle="projecting", zorder=3))
+    if isinstance(plan, MarkedDrafting):
+        _draw_low_confidence(ax, plan)
     if symbols is not None:
         # rooms as a light tint with a dashed edge: where no wall closes a room (a wall the scan
         # missed), the dashes show where it was closed from the scanned floor
@@ -86,6 +95,22 @@ def drafting_figure(
     draw_annotations(ax, annotations.labels, annotations.kinds, annotations.positions, annotations.directions)
     draw_scale_bar(fig, sheet, params)
     return fig
+
+
+def _draw_low_confidence(ax, plan: MarkedDrafting) -> None:
+    """The low-confidence walls, rooms and openings of a ``MarkedDrafting`` plan, dashed, with a
+    note saying what the dashes mean when there are any."""
+    from matplotlib.collections import LineCollection
+
+    dashed, rooms, openings = plan.dashed, plan.low_rooms, plan.low_openings
+    if len(dashed):
+        ax.add_collection(LineCollection(list(dashed), colors=LOW_CONFIDENCE_COLOR, linewidths=1.6, linestyles=LOW_CONFIDENCE_DASH, zorder=3))
+    if rooms:
+        ax.add_collection(LineCollection(list(rooms), colors=LOW_CONFIDENCE_COLOR, linewidths=0.7, linestyles=LOW_CONFIDENCE_DASH, zorder=2))
+    if len(openings):
+        ax.add_collection(LineCollection(list(openings), colors=LOW_CONFIDENCE_COLOR, linewidths=1.0, linestyles=LOW_CONFIDENCE_DASH, zorder=4))
+    if len(dashed) or rooms or len(openings):
+        ax.text(0.01, 0.01, "dashed red: low confidence (check on site)", transform=ax.transAxes, ha="left", fontsize=5.5, color=LOW_CONFIDENCE_COLOR)
 
 
 def _draw_dimensions(ax, symbols: PlanSymbols) -> None:

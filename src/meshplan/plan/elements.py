@@ -1,0 +1,748 @@
+"""Building elements: what the walls, rooms and openings *are*, beyond their geometry.
+
+* **Rooms** are numbered in reading order per story, story number first (``0.01``, ``0.02``, ...:
+  rows from the top of the plan down, each row from left to right; x to the right, z down the
+  page), typed from their shape and contents (:func:`room_type`: a *stair* holds a flight of
+  regular steps, a *corridor* is long and narrow with several doors, a *closet* is small, an
+  *open* space is large, any other is a *room*) and named. A ``rooms.json`` (or a ``plan.json``,
+  whose ``rooms`` block has the same form) passed back with ``--rooms`` renames, renumbers and
+  retypes them: each of its rooms goes to the computed room of its story that overlaps it most
+  (intersection over union at least :data:`MATCH_IOU`, or the one holding its centre), so the
+  names survive a re-run that moves the walls a little.
+* **Walls** (physical, :mod:`meshplan.walls.physical`) get the rooms on each side, whether they
+  are exterior, and a confidence.
+* **Openings** get their physical wall, clear width and height, sill, the two rooms they connect
+  (or ``"outside"``), the leaf's side and swing where the scan shows the leaf
+  (:func:`door_leaf`), and a confidence.
+
+Confidence (``high``, ``medium``, ``low``, always with the reason) tells a reader what to check:
+
+* wall: both faces scanned and reaching floor and ceiling: high; one face (thickness assumed),
+  or not reaching floor or ceiling: medium; shorter than :data:`SHORT_WALL_M` or moved at its
+  ends by more than :data:`LONG_JOIN_SHARE` of its length (extended across what the scan
+  missed): low;
+* room: closed by scanned walls: high; by walls continued across gaps (``extension``): medium;
+  by the scanned floor: low;
+* opening: the hole seen in both faces of its wall with wall beside both jambs: high; in one face:
+  medium; in none clearly, or sizes outside those of doors and windows: low.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import numpy as np
+import shapely
+from shapely.geometry import Point, Polygon
+
+from ..errors import InputError
+from ..geometry import FloatArray, Mesh
+from ..orient import Story
+from ..walls import FlatWalls, PhysicalWall
+from ..walls.physical import wall_of_face
+from .drafting import DraftingPlan
+from .openings import Openings
+from .rooms import Room
+
+# --------------------------------------------------------------------------------------------
+# Thresholds (metres, square metres, degrees), each with its reason
+
+#: A wall shorter than this (m) is a fragment as often as a wall: a return, a pillar's face.
+SHORT_WALL_M = 1.0
+#: A wall whose ends moved (``PhysicalWall.joined``) by more than this share of its length in
+#: all was drawn across what the scan did not show.
+LONG_JOIN_SHARE = 0.25
+#: Probes for the rooms beside a wall lie this far (m) beyond each face: inside the net floor
+#: area of a room (whose polygon starts at the face) but short of the next wall of a corridor.
+SIDE_PROBE_M = 0.25
+#: ... and a room counts when its polygon comes this close (m) to a probe: room polygons closed
+#: by the floor end where the floor scan does, 0.1-0.2 m short of the wall behind furniture.
+SIDE_SLACK_M = 0.2
+#: Probes along a wall, as shares of its length (a long corridor wall has several rooms behind).
+SIDE_SAMPLES = np.linspace(0.1, 0.9, 9)
+
+#: A room is a closet (storage) below this floor area (m2): a walk-in closet or a store room;
+#: a bathroom is 3.5-6 m2.
+CLOSET_AREA_M2 = 3.0
+#: A room is an open space from this area (m2): an open-plan office or hall, larger than any
+#: closed room of a dwelling (living rooms are 20-40 m2).
+OPEN_AREA_M2 = 50.0
+#: A corridor is at least this many times longer than wide (its minimum rotated rectangle:
+#: a 2.2 m hall along two 2.5 m rooms) ...
+CORRIDOR_ASPECT = 2.0
+#: ... at most this wide (m): hallways are 0.9-2.4 m wide ...
+CORRIDOR_MAX_WIDTH_M = 2.5
+#: ... and has at least this many doors (several: a passage, not a narrow room such as a bath
+#: or a galley kitchen with one or two).
+CORRIDOR_MIN_DOORS = 3
+
+#: Steps of a stair: up-facing surfaces at this many distinct heights or more between the floor
+#: and the ceiling (a storey of 2.5-3 m takes 14-18 risers; half a flight shows 7-9 of them,
+#: while a room's furniture tops, shelves included, give at most 5 regular levels), ...
+STAIR_MIN_STEPS = 7
+#: ... each at least this large (m2: a tread of 0.25 x 0.8 m, less the scan's holes), ...
+STAIR_TREAD_M2 = 0.1
+#: ... whose rises (m) lie in the range building codes allow (0.12-0.22 m) ...
+STAIR_RISE_M = (0.12, 0.22)
+#: ... and are regular (coefficient of variation of the rises at most this): furniture tops
+#: (0.45 m seats, 0.75 m tables, 0.9 m counters) never are.
+STAIR_RISE_CV = 0.35
+#: Heights are binned at this size (m) to find the steps: below half the lowest rise.
+STAIR_BIN_M = 0.04
+#: ... and each step lies this far (m) or more in plan from the one below (a going is 0.22-0.3 m;
+#: the shelves of a bookcase, regular as they are, stand above each other).
+STAIR_GOING_MIN_M = 0.12
+#: A room above a stair of the story below, overlapping it by this share of the smaller, is the
+#: stair's upper end (its floor has the stairwell's opening).
+STAIR_ABOVE_SHARE = 0.3
+
+#: A computed room takes the name of a rooms.json room it overlaps by at least this intersection
+#: over union: a re-run moves walls by centimetres, not by half a room.
+MATCH_IOU = 0.3
+
+#: Door and window sizes outside these ranges (m) make an opening low-confidence: the detector's
+#: own limits (``PlanParams``: doors 0.6-1.5 m wide, about 2 m high) with a margin.
+DOOR_WIDTH_M = (0.6, 1.6)
+DOOR_HEIGHT_M = (1.8, 2.6)
+WINDOW_WIDTH_M = (0.3, 3.5)
+#: The hole of an opening is seen on a face when wall-facing triangles in the plane of the face
+#: (within :data:`HOLE_PLANE_M`) cover less than this share of the opening's inner rectangle
+#: (inset by :data:`HOLE_INSET_M` from the jambs, sill and head, where scans round edges off).
+HOLE_EMPTY_SHARE = 0.1
+HOLE_PLANE_M = 0.05
+HOLE_INSET_M = 0.1
+#: The rooms an opening connects are probed this far (m) beyond each face of its wall.
+OPENING_PROBE_M = 0.4
+
+#: A door leaf is looked for in the height band (m above the floor) where nothing else stands
+#: that close to a door: above skirtings and chair seats, below the head.
+LEAF_BAND_M = (0.3, 1.8)
+#: Faces of a leaf lie between these distances from the hinge, as shares of the door's width
+#: (the part near the hinge is hidden by the jamb, the tip rounded off).
+LEAF_REACH = (0.15, 0.95)
+#: A leaf's faces contain the ray from the hinge: |normal . ray| at most this.
+LEAF_RAY_COS = 0.3
+#: A leaf is seen when its faces cover at least this share of one side of it (a 4 cm leaf shows
+#: up to both sides, 2.0), and at least twice what any other (hinge, side) shows.
+LEAF_MIN_SHARE = 0.3
+#: A 4 cm leaf standing in the opening narrows it by this much (m): the clear width is measured
+#: to the open leaf's face.
+LEAF_THICKNESS_M = 0.04
+
+
+# --------------------------------------------------------------------------------------------
+# Rooms: reading order, numbers, types, names
+
+
+def reading_order(rooms: tuple[Room, ...]) -> list[int]:
+    """Indices of ``rooms`` in reading order: by story, then in rows from the top of the plan
+    (smallest z) down, each row from left to right (smallest x).
+
+    A row starts at the topmost room left and holds every room whose centroid lies above that
+    room's bottom edge, so rooms of different depths side by side are read left to right.
+    """
+    order: list[int] = []
+    for story in sorted({r.story for r in rooms}):
+        left = [i for i, r in enumerate(rooms) if r.story == story]
+        left.sort(key=lambda i: (rooms[i].polygon.bounds[1], rooms[i].polygon.bounds[0]))
+        while left:
+            first = left[0]
+            bottom = rooms[first].polygon.bounds[3]
+            row = [i for i in left if rooms[i].polygon.centroid.y < bottom]
+            row.sort(key=lambda i: (rooms[i].polygon.centroid.x, rooms[i].polygon.centroid.y))
+            order.extend(row)
+            left = [i for i in left if i not in row]
+    return order
+
+
+def room_number(story: int, k: int) -> str:
+    """``0.01``: the story, a dot, the room's place in its story (two digits, more if needed)."""
+    return f"{story}.{k:02d}"
+
+
+@dataclass(frozen=True)
+class RoomEdit:
+    """One room of a rooms.json: what the user set (``None``: keep what was computed)."""
+
+    story: int
+    polygon: Polygon | None
+    center: tuple[float, float] | None
+    number: str | None
+    name: str | None
+    type: str | None
+
+
+ROOM_TYPES = ("room", "corridor", "stair", "closet", "open")
+
+
+def load_room_edits(path: str | os.PathLike) -> tuple[RoomEdit, ...]:
+    """Read a rooms.json (or a plan.json): ``{"rooms": [{"story", "polygon" or "center",
+    "number", "name", "type"}, ...]}``; every field but ``story`` and a position is optional.
+
+    Raises
+    ------
+    InputError
+        For a missing or malformed file, with what to fix.
+    """
+    fix = 'give a rooms.json like {"rooms": [{"story": 0, "center": [x, z], "name": "Kitchen"}]} (plan.json\'s rooms block)'
+    try:
+        with open(path, encoding="utf-8") as fh:
+            doc = json.load(fh)
+    except OSError as exc:
+        raise InputError(f"cannot read the rooms file {os.fspath(path)}: {exc.strerror or exc}", fix) from None
+    except (ValueError, UnicodeDecodeError) as exc:
+        raise InputError(f"the rooms file {os.fspath(path)} is not JSON ({exc})", fix) from None
+    items = doc.get("rooms") if isinstance(doc, dict) else doc
+    if not isinstance(items, list):
+        raise InputError(f"the rooms file {os.fspath(path)} has no list of rooms", fix)
+    out = []
+    for k, it in enumerate(items):
+        where = f"room {k} of {os.fspath(path)}"
+        if not isinstance(it, dict):
+            raise InputError(f"{where} is not an object", fix)
+        try:
+            story = int(it.get("story", 0))
+            poly = Polygon(np.asarray(it["polygon"], dtype=np.float64)).buffer(0) if it.get("polygon") is not None else None
+            center = tuple(float(v) for v in it["center"][:2]) if it.get("center") is not None else None
+        except (TypeError, ValueError, IndexError) as exc:
+            raise InputError(f"{where} has a malformed story, polygon or center ({exc})", fix) from None
+        if poly is None and center is None:
+            raise InputError(f"{where} has neither a polygon nor a center", fix)
+        kind = it.get("type")
+        if kind is not None and kind not in ROOM_TYPES:
+            raise InputError(f"{where} has type {kind!r}", f"use one of {', '.join(ROOM_TYPES)}")
+        text = {key: (str(it[key]) if it.get(key) is not None else None) for key in ("number", "name")}
+        out.append(RoomEdit(story, poly if poly is not None and not poly.is_empty else None, center, text["number"], text["name"], kind))  # type: ignore[arg-type]
+    return tuple(out)
+
+
+def _match_edits(rooms: tuple[Room, ...], edits: tuple[RoomEdit, ...]) -> dict[int, RoomEdit]:
+    """Computed room index -> the edit it takes: greedily, the largest overlap first."""
+    pairs = []
+    for j, e in enumerate(edits):
+        for i, r in enumerate(rooms):
+            if r.story != e.story:
+                continue
+            if e.polygon is not None and r.polygon.intersects(e.polygon):
+                iou = r.polygon.intersection(e.polygon).area / max(r.polygon.union(e.polygon).area, 1e-12)
+                if iou >= MATCH_IOU:
+                    pairs.append((-iou, i, j))
+                    continue
+            c = e.center if e.center is not None else (e.polygon.representative_point().coords[0] if e.polygon is not None else None)
+            if c is not None and r.polygon.contains(Point(c)):
+                pairs.append((-MATCH_IOU + 1e-6, i, j))
+    taken_r: set[int] = set()
+    taken_e: set[int] = set()
+    out = {}
+    for _, i, j in sorted(pairs):
+        if i in taken_r or j in taken_e:
+            continue
+        taken_r.add(i)
+        taken_e.add(j)
+        out[i] = edits[j]
+    return out
+
+
+def name_rooms(rooms: tuple[Room, ...], edits: tuple[RoomEdit, ...] = ()) -> tuple[Room, ...]:
+    """The rooms numbered in reading order per story and labelled ``Room 1``, ``Room 2``, ...
+    across the stories in that order, with the numbers, names and types of the ``edits``
+    (:func:`load_room_edits`) they match; a room matching none takes the next number free in
+    its story. A user's name becomes the label too (plans, IFC and report show it)."""
+    order = reading_order(rooms)
+    matched = _match_edits(rooms, edits)
+    used: dict[int, set[str]] = {}
+    for i, m in matched.items():
+        if m.number:
+            used.setdefault(rooms[i].story, set()).add(m.number)
+    numbers: dict[int, str] = {}
+    count: dict[int, int] = {}
+    for i in order:
+        e = matched.get(i)
+        s = rooms[i].story
+        if e is not None and e.number:
+            numbers[i] = e.number
+            continue
+        k = count.get(s, 0)
+        while True:
+            k += 1
+            if room_number(s, k) not in used.get(s, set()):
+                break
+        count[s] = k
+        numbers[i] = room_number(s, k)
+    # listed by story and number (user numbers in their own order)
+    final = sorted(order, key=lambda i: (rooms[i].story, _number_key(numbers[i])))
+    out = []
+    for n, i in enumerate(final):
+        r, e = rooms[i], matched.get(i)
+        label = e.name if e is not None and e.name else f"Room {n + 1}"
+        kind = e.type if e is not None and e.type else ""
+        out.append(replace(r, label=label, number=numbers[i], name=label, type=kind or r.type, type_reason="rooms.json" if kind else ""))
+    return tuple(out)
+
+
+def _number_key(number: str) -> tuple:
+    """Sort key of a room number: numerically where it is ``story.k``, else as text."""
+    try:
+        return (0, float(number.split(".", 1)[1]) if "." in number else float(number), number)
+    except ValueError:
+        return (1, 0.0, number)
+
+
+def stair_steps(mesh: Mesh, polygon: Polygon, story: Story) -> int:
+    """How many regular steps (:data:`STAIR_MIN_STEPS` ...) the faces inside ``polygon`` show;
+    0 when they show no flight."""
+    c = mesh.face_centroids
+    up = mesh.face_normals[:, 1] > 0.9
+    h = c[:, 1]
+    sel = up & (h > story.floor + 0.08) & (h < story.ceiling - 0.3)
+    x0, z0, x1, z1 = polygon.bounds
+    sel &= (c[:, 0] >= x0) & (c[:, 0] <= x1) & (c[:, 2] >= z0) & (c[:, 2] <= z1)
+    idx = np.flatnonzero(sel)
+    if len(idx) < STAIR_MIN_STEPS:
+        return 0
+    idx = idx[shapely.contains_xy(polygon, c[idx, 0], c[idx, 2])]
+    if len(idx) < STAIR_MIN_STEPS:
+        return 0
+    bins = np.floor((h[idx] - story.floor) / STAIR_BIN_M).astype(np.int64)
+    area = np.bincount(bins, weights=mesh.face_areas[idx])
+    weights = mesh.face_areas[idx]
+    cx = np.bincount(bins, weights=weights * c[idx, 0], minlength=len(area))
+    cz = np.bincount(bins, weights=weights * c[idx, 2], minlength=len(area))
+    full = area >= STAIR_TREAD_M2 / 2
+    # runs of adjacent bins are one level, at their area-weighted height
+    levels = []
+    k = 0
+    while k < len(full):
+        if not full[k]:
+            k += 1
+            continue
+        j = k
+        while j + 1 < len(full) and full[j + 1]:
+            j += 1
+        a = area[k : j + 1]
+        if a.sum() >= STAIR_TREAD_M2:
+            total = float(a.sum())
+            where = (float(cx[k : j + 1].sum()) / total, float(cz[k : j + 1].sum()) / total)
+            levels.append((float(np.average(np.arange(k, j + 1) + 0.5, weights=a)) * STAIR_BIN_M, where))
+        k = j + 1
+    # the longest chain of regular rises, each step beside the one below
+    best = 0
+    for start in range(len(levels)):
+        chain = [levels[start]]
+        for y, where in levels[start + 1 :]:
+            rise = y - chain[-1][0]
+            going = float(np.hypot(where[0] - chain[-1][1][0], where[1] - chain[-1][1][1]))
+            if STAIR_RISE_M[0] <= rise <= STAIR_RISE_M[1] and going >= STAIR_GOING_MIN_M:
+                chain.append((y, where))
+        if len(chain) >= STAIR_MIN_STEPS:
+            rises = np.diff([y for y, _ in chain])
+            if np.std(rises) / np.mean(rises) <= STAIR_RISE_CV:
+                best = max(best, len(chain))
+    return best
+
+
+def room_type(room: Room, doors: int, steps: int) -> tuple[str, str]:
+    """``(type, reason)`` of a room from its shape, its ``doors`` and the ``steps`` it holds."""
+    if steps >= STAIR_MIN_STEPS:
+        return "stair", f"{steps} regular steps"
+    rect = room.polygon.minimum_rotated_rectangle
+    xy = np.asarray(rect.exterior.coords)[:4] if isinstance(rect, Polygon) else np.zeros((4, 2))
+    sides = np.linalg.norm(np.diff(np.vstack([xy, xy[:1]]), axis=0), axis=1)
+    long_m, short_m = float(sides.max()), float(max(sides.min(), 1e-9))
+    if long_m / short_m >= CORRIDOR_ASPECT and short_m <= CORRIDOR_MAX_WIDTH_M and doors >= CORRIDOR_MIN_DOORS:
+        return "corridor", f"{long_m:.1f} x {short_m:.1f} m with {doors} doors"
+    if room.area < CLOSET_AREA_M2:
+        return "closet", f"{room.area:.1f} m2, below {CLOSET_AREA_M2:g} m2"
+    if room.area >= OPEN_AREA_M2:
+        return "open", f"{room.area:.0f} m2, {OPEN_AREA_M2:g} m2 or more"
+    return "room", f"{room.area:.1f} m2"
+
+
+ROOM_CONFIDENCE = {
+    "walls": ("high", "closed by scanned walls"),
+    "extension": ("medium", "closed by walls continued across what the scan missed"),
+    "floor": ("low", "closed where the scanned floor ends: a wall is missing"),
+}
+
+
+# --------------------------------------------------------------------------------------------
+# Walls: rooms on each side, exterior, confidence
+
+
+def _rooms_near(rooms: tuple[Room, ...], story: int, pts: FloatArray, slack: float) -> set[int]:
+    out = set()
+    for i, r in enumerate(rooms):
+        if r.story != story:
+            continue
+        if np.any(shapely.distance(r.polygon, shapely.points(pts)) <= slack):
+            out.add(i)
+    return out
+
+
+def wall_elements(
+    physical: tuple[PhysicalWall, ...], rooms: tuple[Room, ...], stories: tuple[Story, ...], floor_reach_m: float, ceiling_reach_m: float
+) -> tuple[PhysicalWall, ...]:
+    """The walls with the rooms on each side, ``exterior`` (rooms on one side only) and their
+    confidence (see the module's description)."""
+    out = []
+    for w in physical:
+        a, b = np.asarray(w.start), np.asarray(w.end)
+        base = a[None, :] + SIDE_SAMPLES[:, None] * (b - a)[None, :]
+        n = w.normal
+        reach = w.thickness / 2 + SIDE_PROBE_M
+        front = _rooms_near(rooms, w.story, base + reach * n, SIDE_SLACK_M)
+        back = _rooms_near(rooms, w.story, base - reach * n, SIDE_SLACK_M)
+        exterior = bool(front) != bool(back)
+        story = stories[w.story]
+        moved = abs(w.joined[0]) + abs(w.joined[1])
+        length = w.length
+        floor_ok = w.bottom - story.floor <= floor_reach_m
+        ceiling_ok = story.ceiling - w.top <= ceiling_reach_m
+        if length < SHORT_WALL_M:
+            level, why = "low", f"short ({length:.2f} m)"
+        elif moved > LONG_JOIN_SHARE * length:
+            level, why = "low", f"extended {moved:.2f} m across unscanned space"
+        elif not w.paired:
+            level, why = "medium", f"one face scanned (thickness assumed {w.thickness:.2f} m)"
+        elif not (floor_ok and ceiling_ok):
+            missing = "floor to ceiling" if not floor_ok and not ceiling_ok else "to the floor" if not floor_ok else "to the ceiling"
+            level, why = "medium", f"both faces scanned, not {missing}"
+        else:
+            level, why = "high", "both faces scanned, floor to ceiling"
+        out.append(replace(w, exterior=exterior, rooms=(tuple(sorted(front)), tuple(sorted(back))), confidence=level, confidence_reason=why))
+    return tuple(out)
+
+
+# --------------------------------------------------------------------------------------------
+# Openings
+
+
+@dataclass(frozen=True)
+class Swing:
+    """A door leaf seen in the scan: its hinge (plan point), which hand (``left`` or ``right``:
+    the hinge's side seen from the room the leaf opens into, facing the door) and how far it
+    stands open (degrees, 90 = square to the wall)."""
+
+    hinge: tuple[float, float]
+    hand: str
+    angle_deg: float
+
+
+@dataclass(frozen=True)
+class OpeningElement:
+    """What an opening is as a building element (one per row of :class:`Openings`).
+
+    Attributes
+    ----------
+    wall
+        Index of its physical wall (-1: none).
+    clear_width, height
+        Clear opening (m): between the jambs (less the open leaf, where one is seen) and from
+        its bottom to the head.
+    sill
+        Windows: the sill's height above the story's floor (m); doors ``None``.
+    connects
+        The rooms on the side of the listed face's normal and on the other side: an index into
+        the result's rooms, ``"outside"`` beyond an exterior wall, ``None`` where unknown.
+    opens_to
+        Doors whose leaf the scan shows: the side it opens into (as in ``connects``).
+    swing
+        The leaf (:class:`Swing`), ``None`` where the scan does not show it.
+    confidence, confidence_reason
+        high, medium or low, and why.
+    """
+
+    wall: int
+    clear_width: float
+    height: float
+    sill: float | None
+    connects: tuple[int | str | None, int | str | None]
+    opens_to: int | str | None
+    swing: Swing | None
+    confidence: str
+    confidence_reason: str
+
+    def to_dict(self, ndigits: int = 4) -> dict[str, Any]:
+        d: dict[str, Any] = {
+            "physical_wall": self.wall,
+            "clear_width": round(self.clear_width, ndigits),
+            "height": round(self.height, ndigits),
+            "sill": round(self.sill, ndigits) if self.sill is not None else None,
+            "connects": list(self.connects),
+            "opens_to": self.opens_to,
+            "swing": None
+            if self.swing is None
+            else {"hinge": [round(v, ndigits) + 0.0 for v in self.swing.hinge], "hand": self.swing.hand, "angle_deg": round(self.swing.angle_deg, 1)},
+            "confidence": {"level": self.confidence, "reason": self.confidence_reason},
+        }
+        return d
+
+
+@dataclass(frozen=True, eq=False)
+class _Near:
+    """The near-vertical faces of the mesh around one opening (one pass over the mesh per
+    opening; the tests below then look at a few thousand faces)."""
+
+    xz: FloatArray
+    y: FloatArray
+    normal: FloatArray  # (k, 2) horizontal part
+    area: FloatArray
+
+    @classmethod
+    def around(cls, every: _Near, center: FloatArray, radius: float) -> _Near:
+        """The faces of ``every`` within ``radius`` (m, a square) of the plan point ``center``."""
+        ok = np.flatnonzero((np.abs(every.xz[:, 0] - center[0]) <= radius) & (np.abs(every.xz[:, 1] - center[1]) <= radius))
+        return cls(every.xz[ok], every.y[ok], every.normal[ok], every.area[ok])
+
+
+def _hole_seen(near: _Near, walls: FlatWalls, face: int, u0: float, u1: float, bottom: float, top: float) -> bool:
+    """Whether face ``face`` shows the opening ``[u0, u1] x [bottom, top]`` as a hole with wall
+    beside both jambs (:data:`HOLE_EMPTY_SHARE`)."""
+    if walls.u_min[face] > u0 - HOLE_INSET_M or walls.u_max[face] < u1 + HOLE_INSET_M:
+        return False  # a jamb at the face's end: no wall seen beside it
+    a, b = u0 + HOLE_INSET_M, u1 - HOLE_INSET_M
+    lo, hi = bottom + HOLE_INSET_M, top - HOLE_INSET_M
+    if b <= a or hi <= lo:
+        return False
+    n, t, off = walls.normal[face], walls.tangent[face], walls.offset[face]
+    sel = (np.abs(near.xz @ n - off) <= HOLE_PLANE_M) & (near.normal @ n > 0.8)
+    u = near.xz @ t
+    sel &= (u >= a) & (u <= b) & (near.y >= lo) & (near.y <= hi)
+    return float(near.area[sel].sum()) < HOLE_EMPTY_SHARE * (b - a) * (hi - lo)
+
+
+def door_leaf(near: _Near, walls: FlatWalls, face: int, u0: float, u1: float, thickness: float, floor: float) -> tuple[int, Swing] | None:
+    """The open leaf of a door ``[u0, u1]`` in face ``face`` of a wall ``thickness`` thick, if
+    the scan shows it: ``(side, swing)`` with side +1 towards the face's normal, -1 beyond the
+    wall; ``None`` when no leaf stands out (:data:`LEAF_MIN_SHARE`)."""
+    n, t, off = walls.normal[face], walls.tangent[face], walls.offset[face]
+    width = u1 - u0
+    xz = near.xz
+    band = (near.y >= floor + LEAF_BAND_M[0]) & (near.y <= floor + LEAF_BAND_M[1])
+    sel = band & (np.abs(xz @ t - 0.5 * (u0 + u1)) <= 1.5 * width) & (np.abs(xz @ n - off + thickness / 2) <= thickness / 2 + width)
+    idx = np.flatnonzero(sel)
+    if not len(idx):
+        return None
+    p = xz[idx]
+    nrm = near.normal[idx]
+    area = near.area[idx]
+    scores = []
+    for side in (1, -1):
+        plane = off if side > 0 else off - thickness  # the face the leaf swings out of
+        for u_h in (u0, u1):
+            hinge = u_h * t + plane * n
+            ray = p - hinge
+            dist = np.linalg.norm(ray, axis=1)
+            out = side * (p @ n - plane) > 0.02
+            ok = out & (dist >= LEAF_REACH[0] * width) & (dist <= LEAF_REACH[1] * width)
+            with np.errstate(invalid="ignore", divide="ignore"):
+                cosr = np.abs(np.einsum("ij,ij->i", nrm, ray)) / np.maximum(dist, 1e-9)
+            ok &= cosr <= LEAF_RAY_COS
+            # towards the opening's side of the hinge (a leaf covers the doorway when closed)
+            inward = (ray @ t) * (1 if u_h == u0 else -1) >= -0.05
+            ok &= inward
+            share = float(area[ok].sum()) / (width * (LEAF_BAND_M[1] - LEAF_BAND_M[0]))
+            angle = 0.0
+            if ok.any():
+                across = np.average((ray[ok] @ n) * side, weights=area[ok])
+                along = np.average(np.abs(ray[ok] @ t), weights=area[ok])
+                angle = float(np.degrees(np.arctan2(across, along)))
+            scores.append((share, side, u_h, hinge, angle))
+    scores.sort(key=lambda s: -s[0])
+    best, second = scores[0], scores[1]
+    if best[0] < LEAF_MIN_SHARE or best[0] < 2 * second[0]:
+        return None
+    share, side, u_h, hinge, angle = best
+    # seen from the room it opens into, facing the door (looking along -side * n): is the
+    # hinge on the left? right of the viewer = the viewer's direction turned clockwise on the
+    # page (x right, z down): (-d_z, d_x) for d = -side * n
+    look = -side * n
+    right = np.array([-look[1], look[0]])
+    other = u1 if u_h == u0 else u0
+    hand = "right" if float((hinge - (other * t + (off if side > 0 else off - thickness) * n)) @ right) > 0 else "left"
+    return side, Swing((float(hinge[0]), float(hinge[1])), hand, angle)
+
+
+def opening_elements(
+    openings: Openings,
+    walls: FlatWalls,
+    physical: tuple[PhysicalWall, ...],
+    rooms: tuple[Room, ...],
+    stories: tuple[Story, ...],
+    mesh: Mesh,
+) -> tuple[OpeningElement, ...]:
+    """The :class:`OpeningElement` of every opening (``physical`` with their rooms, from
+    :func:`wall_elements`)."""
+    carrier = wall_of_face(physical, len(walls))
+    centers = openings.center(walls) if len(openings) else np.zeros((0, 2))
+    #: faces standing within 30 degrees of vertical: walls, jambs and door leaves
+    vertical = np.flatnonzero(np.abs(mesh.face_normals[:, 1]) < 0.5) if len(openings) else np.zeros(0, np.int64)
+    c3 = mesh.face_centroids[vertical]
+    every = _Near(c3[:, [0, 2]], c3[:, 1], mesh.face_normals[vertical][:, [0, 2]], mesh.face_areas[vertical])
+    out = []
+    for i in range(len(openings)):
+        f = int(openings.wall[i])
+        k = int(carrier[f]) if 0 <= f < len(carrier) else -1
+        pw = physical[k] if k >= 0 else None
+        story = stories[int(openings.story[i])]
+        kind = openings.kind[i]
+        thickness = pw.thickness if pw is not None else 0.0
+        n = walls.normal[f]
+        c = centers[i]
+        sides: list[int | str | None] = []
+        for pt in (c + OPENING_PROBE_M * n, c - (thickness + OPENING_PROBE_M) * n):
+            beside = _rooms_near(rooms, int(openings.story[i]), pt[None, :], SIDE_SLACK_M)
+            if beside:
+                sides.append(min(beside, key=lambda j: float(rooms[j].polygon.distance(Point(pt)))))
+            elif pw is not None and pw.exterior:
+                sides.append("outside")
+            else:
+                sides.append(None)
+        width = float(openings.u_max[i] - openings.u_min[i])
+        height = float(openings.top[i] - openings.bottom[i])
+        near = _Near.around(every, c, 2.0 * width + thickness + 0.5)
+        swing = None
+        opens_to: int | str | None = None
+        if kind == "door":
+            leaf = door_leaf(near, walls, f, float(openings.u_min[i]), float(openings.u_max[i]), thickness, story.floor)
+            if leaf is not None:
+                side, swing = leaf
+                opens_to = sides[0] if side > 0 else sides[1]
+        clear = width - (LEAF_THICKNESS_M if swing is not None else 0.0)
+        # confidence: the hole in how many faces of the wall, and plausible sizes
+        cuts = openings.faces[i] if i < len(openings.faces) and openings.faces[i] else ()
+        if not cuts:
+            cuts = ((f, openings.u_min[i], openings.u_max[i], openings.bottom[i], openings.top[i]),)
+        seen_sides = {
+            int(np.sign(float(walls.normal[g] @ n))) for g, u0, u1, b, t in cuts if _hole_seen(near, walls, int(g), float(u0), float(u1), float(b), float(t))
+        }
+        w_lo, w_hi = DOOR_WIDTH_M if kind == "door" else WINDOW_WIDTH_M
+        odd = not (w_lo <= width <= w_hi) or (kind == "door" and not DOOR_HEIGHT_M[0] <= height <= DOOR_HEIGHT_M[1])
+        if odd:
+            level, why = "low", f"unusual size for a {kind} ({width:.2f} x {height:.2f} m)"
+        elif len(seen_sides) >= 2:
+            level, why = "high", "frame seen on both faces of its wall"
+        elif seen_sides:
+            level, why = "medium", "frame seen on one face of its wall"
+        else:
+            level, why = "low", "no clear frame on either face (at the end of a scanned wall)"
+        sill = float(openings.bottom[i] - story.floor) if kind == "window" else None
+        out.append(OpeningElement(k, clear, height, sill, (sides[0], sides[1]), opens_to, swing, level, why))
+    return tuple(out)
+
+
+def type_rooms(
+    rooms: tuple[Room, ...], elements: tuple[OpeningElement, ...], kinds: tuple[str, ...], mesh: Mesh, stories: tuple[Story, ...]
+) -> tuple[Room, ...]:
+    """The rooms with their type (a rooms.json type is kept) and confidence."""
+    doors = [0] * len(rooms)
+    for e, kind in zip(elements, kinds):
+        if kind != "door":
+            continue
+        for k in {x for x in e.connects if isinstance(x, int)}:
+            doors[k] += 1
+    out = []
+    for i, r in enumerate(rooms):
+        level, why = ROOM_CONFIDENCE.get(r.closed_by, ("low", r.closed_by))
+        if r.type_reason == "rooms.json":
+            kind, reason = r.type, "rooms.json"
+        else:
+            kind, reason = room_type(r, doors[i], stair_steps(mesh, r.polygon, stories[r.story]))
+        out.append(replace(r, type=kind, type_reason=reason, confidence=level, confidence_reason=why))
+    # the upper end of a stair: the room above it
+    for i, r in enumerate(out):
+        if r.type_reason == "rooms.json" or r.type == "stair" or r.story == 0:
+            continue
+        for below in out:
+            if below.story == r.story - 1 and below.type == "stair":
+                share = r.polygon.intersection(below.polygon).area / max(min(r.area, below.area), 1e-9)
+                if share >= STAIR_ABOVE_SHARE:
+                    out[i] = replace(r, type="stair", type_reason=f"above the stair {below.number or below.label}")
+                    break
+    return tuple(out)
+
+
+def rooms_document(rooms: tuple[Room, ...], ndigits: int = 4) -> dict[str, Any]:
+    """A rooms.json to edit and pass back with ``--rooms``: number, name, type, story, centre
+    and polygon of every room."""
+    items = []
+    for r in rooms:
+        c = r.polygon.representative_point()
+        items.append(
+            {
+                "story": r.story,
+                "number": r.number,
+                "name": r.name or r.label,
+                "type": r.type,
+                "center": [round(c.x, ndigits) + 0.0, round(c.y, ndigits) + 0.0],
+                "polygon": (np.round(np.asarray(r.polygon.exterior.coords)[:-1], ndigits) + 0.0).tolist(),
+            }
+        )
+    return {"rooms": items}
+
+
+# --------------------------------------------------------------------------------------------
+# The drafting plan, with what is low-confidence set apart
+
+
+@dataclass(frozen=True, eq=False)
+class MarkedDrafting(DraftingPlan):
+    """A drafting plan whose low-confidence walls, rooms and openings are listed apart, so that
+    the drawing shows them dashed (as RoomPlan does).
+
+    Attributes
+    ----------
+    dashed
+        ``(S, 2, 2)``: the cut segments (of ``slices``) of low-confidence walls.
+    solid
+        ``(S, 2, 2)``: the other cut segments.
+    low_rooms
+        Closed rings ``[x, z]`` of the low-confidence rooms.
+    low_openings
+        ``(N, 2, 2)``: each low-confidence opening as its span on its wall face.
+    """
+
+    dashed: FloatArray = field(default_factory=lambda: np.zeros((0, 2, 2)))
+    solid: FloatArray = field(default_factory=lambda: np.zeros((0, 2, 2)))
+    low_rooms: tuple[FloatArray, ...] = ()
+    low_openings: FloatArray = field(default_factory=lambda: np.zeros((0, 2, 2)))
+
+
+def mark_low_confidence(
+    plan: DraftingPlan,
+    walls: FlatWalls,
+    physical: tuple[PhysicalWall, ...],
+    rooms: tuple[Room, ...],
+    openings: Openings,
+    elements: tuple[OpeningElement, ...],
+) -> MarkedDrafting:
+    """``plan`` with its low-confidence elements set apart (:class:`MarkedDrafting`): each cut
+    segment belongs to the face whose plane and span hold its middle."""
+    story = plan.story.index
+    seg = np.asarray(plan.slices.segments, dtype=np.float64).reshape(-1, 2, 2)
+    carrier = wall_of_face(physical, len(walls))
+    low_face = np.array([carrier[f] >= 0 and physical[carrier[f]].confidence == "low" for f in range(len(walls))], dtype=bool)
+    low = np.zeros(len(seg), dtype=bool)
+    mine = np.flatnonzero(walls.story == story)
+    if len(seg) and len(mine):
+        mid = seg.mean(axis=1)
+        dist = np.abs(mid @ walls.normal[mine].T - walls.offset[mine][None, :])
+        u = mid @ walls.tangent[mine].T
+        inside = (u >= walls.u_min[mine][None, :] - 0.01) & (u <= walls.u_max[mine][None, :] + 0.01)
+        dist = np.where(inside, dist, np.inf)
+        best = np.argmin(dist, axis=1)
+        ok = np.isfinite(dist[np.arange(len(seg)), best]) & (dist[np.arange(len(seg)), best] < 0.02)
+        low[ok] = low_face[mine[best[ok]]]
+    rings = tuple(np.asarray(r.polygon.exterior.coords) for r in rooms if r.story == story and r.confidence == "low")
+    spans = []
+    for i in np.flatnonzero(openings.story == story):
+        if i < len(elements) and elements[i].confidence == "low":
+            w = int(openings.wall[i])
+            t, n, off = walls.tangent[w], walls.normal[w], walls.offset[w]
+            spans.append([openings.u_min[i] * t + off * n, openings.u_max[i] * t + off * n])
+    return MarkedDrafting(
+        plan.story, plan.height, plan.slices, seg[low], seg[~low], rings, np.array(spans, dtype=np.float64).reshape(-1, 2, 2)
+    )
