@@ -153,6 +153,31 @@ class Mesh:
         )
 
 
+#: The input axes a user can name as up (``--up``), as unit vectors.
+AXIS_VECTORS = {
+    "+x": (1.0, 0.0, 0.0),
+    "-x": (-1.0, 0.0, 0.0),
+    "+y": (0.0, 1.0, 0.0),
+    "-y": (0.0, -1.0, 0.0),
+    "+z": (0.0, 0.0, 1.0),
+    "-z": (0.0, 0.0, -1.0),
+}
+
+#: The 8 corners of the cube of side 1 centred on the origin, indexed by their (x, y, z) bits,
+#: and its 12 triangles wound outward: the box of parametric models (RoomPlan, synthetic).
+BOX_CORNERS = np.array([[x, y, z] for x in (-0.5, 0.5) for y in (-0.5, 0.5) for z in (-0.5, 0.5)])
+BOX_FACES = np.array(
+    [
+        [0, 1, 3], [0, 3, 2],  # -x
+        [4, 6, 7], [4, 7, 5],  # +x
+        [0, 4, 5], [0, 5, 1],  # -y
+        [2, 3, 7], [2, 7, 6],  # +y
+        [0, 2, 6], [0, 6, 4],  # -z
+        [1, 5, 7], [1, 7, 3],  # +z
+    ],
+    dtype=np.int64,
+)
+
 #: Length (m) of the probe drawn from an annotated object along its direction, in every plan,
 #: model and CAD file: long enough to read the direction at 1:50-1:100 (4-8 mm on paper), short
 #: enough not to cross a 1 m wide corridor.

@@ -39,7 +39,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from .errors import GeometryError, MeshplanError
-from .geometry import FloatArray, Mesh
+from .geometry import AXIS_VECTORS, FloatArray, Mesh
 from .io.mesh import UNITS_M
 from .orient import Orientation, OrientParams, orient
 from .units import UNIT_NAMES
@@ -277,7 +277,7 @@ def _check_up(mesh: Mesh, chosen: Assessment, params: OrientParams) -> None:
     auto = assess(mesh, chosen.units, replace(params, up="auto"))
     if auto.orientation is None or not any(auto.ceilings) or auto.grade() == "implausible" or auto.no_building:
         return  # the geometry says no better: the user's axis stands
-    named = np.asarray(_UP_VECTORS[params.up])
+    named = np.asarray(AXIS_VECTORS[params.up])
     found = auto.orientation.gravity.up
     if abs(float(named @ found)) >= np.cos(np.radians(SAME_AXIS_DEG)):
         return  # the same axis: nothing to contradict
@@ -296,14 +296,6 @@ def _check_up(mesh: Mesh, chosen: Assessment, params: OrientParams) -> None:
     )
 
 
-_UP_VECTORS = {
-    "+x": (1.0, 0.0, 0.0),
-    "-x": (-1.0, 0.0, 0.0),
-    "+y": (0.0, 1.0, 0.0),
-    "-y": (0.0, -1.0, 0.0),
-    "+z": (0.0, 0.0, 1.0),
-    "-z": (0.0, 0.0, -1.0),
-}
 
 
 def orient_plausibly(mesh: Mesh, units: str, params: OrientParams, units_explicit: bool) -> tuple[Orientation, tuple[str, ...]]:

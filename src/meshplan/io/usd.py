@@ -31,6 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
+from ..geometry import BOX_CORNERS, BOX_FACES
 from .readers import RawMesh, fan
 
 log = logging.getLogger(__name__)
@@ -52,16 +53,6 @@ SPHERE_SUBDIVISIONS = 2
 #: degrees about x), applied to row vectors (``p @ Z_UP_TO_Y_UP``).
 Z_UP_TO_Y_UP = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])
 
-#: The 8 corners of the unit cube centred on the origin and its 12 triangles, outward.
-_CUBE_VERTICES = np.array([[x, y, z] for x in (-0.5, 0.5) for y in (-0.5, 0.5) for z in (-0.5, 0.5)])
-_CUBE_FACES = np.array([
-    [0, 1, 3], [0, 3, 2],  # -x
-    [4, 6, 7], [4, 7, 5],  # +x
-    [0, 4, 5], [0, 5, 1],  # -y
-    [2, 3, 7], [2, 7, 6],  # +y
-    [0, 2, 6], [0, 6, 4],  # -z
-    [1, 5, 7], [1, 7, 3],  # +z
-], dtype=np.int64)
 
 #: RoomPlan's prim names and the kind of part each stands for.
 _ROOMPLAN_KINDS = {"Wall": "wall", "Door": "door", "Window": "window", "Opening": "opening", "Floor": "floor"}
@@ -152,7 +143,7 @@ def _local_geometry(prim, UsdGeom, time) -> tuple[np.ndarray, np.ndarray] | None
         return v, f
     if prim.IsA(UsdGeom.Cube):
         size = float(UsdGeom.Cube(prim).GetSizeAttr().Get(time))
-        return _CUBE_VERTICES * size, _CUBE_FACES
+        return BOX_CORNERS * size, BOX_FACES
     if prim.IsA(UsdGeom.Sphere):
         import trimesh
 

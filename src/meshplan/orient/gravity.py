@@ -63,19 +63,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import GeometryError
-from ..geometry import FloatArray, Mesh, unit
+from ..geometry import AXIS_VECTORS, FloatArray, Mesh, unit
 from ..sphere import axial_peaks
 from .levels import _choose_stories, find_spikes
 from .params import STANDING_DEG, OrientParams
-
-_AXES = {
-    "+x": (1.0, 0.0, 0.0),
-    "-x": (-1.0, 0.0, 0.0),
-    "+y": (0.0, 1.0, 0.0),
-    "-y": (0.0, -1.0, 0.0),
-    "+z": (0.0, 0.0, 1.0),
-    "-z": (0.0, 0.0, -1.0),
-}
 
 #: Parallel surfaces closer than this (m) are one slab (a sunken floor, the faces of one
 #: partition), not the two sides of a corridor.
@@ -367,7 +358,7 @@ def estimate_gravity(mesh: Mesh, params: OrientParams, up_hint: FloatArray | Non
         rough = unit(np.asarray(up_hint, dtype=np.float64))
         evidence, sign_by = 0.0, "hint"
     elif params.up != "auto":
-        rough = np.array(_AXES[params.up])
+        rough = np.array(AXIS_VECTORS[params.up])
         evidence, sign_by = 0.0, "up option"
     else:
         peaks = axial_peaks(normals, areas, count=6)

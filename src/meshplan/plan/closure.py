@@ -42,6 +42,27 @@ NODE_OVERSHOOT_M = 1e-3
 COLLINEAR_ANGLE_DEG = 5.0
 
 
+def end_crossings(tan: FloatArray, nor: FloatArray, off: FloatArray, ends: FloatArray, sign: float) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """Where the wall ends ``ends`` (along each wall's tangent), run on outward (``sign``: -1 the
+    low ends, +1 the high ends), cross every wall line ``normal . p = offset``.
+
+    Returns
+    -------
+    denom, s, ub
+        ``(n, n)`` arrays: the cosine between end a's outward direction and line b's normal
+        (near 0: parallel), the distance along a's direction to line b (inf or nan when
+        parallel), and the crossing's position along b's tangent.
+    """
+    p = ends[:, None] * tan + off[:, None] * nor  # (n, 2) wall ends
+    d = sign * tan  # outward directions
+    denom = d @ nor.T  # (n, n): d_a . n_b
+    with np.errstate(divide="ignore", invalid="ignore"):
+        s = (off[None, :] - p @ nor.T) / denom  # distance along d_a to line b
+        x = p[:, None, :] + s[..., None] * d[:, None, :]
+    ub = np.einsum("abk,bk->ab", x, tan)
+    return denom, s, ub
+
+
 def close_walls(walls: FlatWalls, index: np.ndarray, corner_m: float, gap_m: float, collinear_m: float) -> tuple[FloatArray, FloatArray, list[LineString]]:
     """Extended spans of the walls in ``index`` and the bridges joining pieces of one line.
 
@@ -73,13 +94,7 @@ def close_walls(walls: FlatWalls, index: np.ndarray, corner_m: float, gap_m: flo
     lo, hi = walls.u_min[index], walls.u_max[index]
     best, target, far_end = {}, {}, {}
     for sign, ends in ((-1.0, lo), (1.0, hi)):
-        p = ends[:, None] * tan + off[:, None] * nor  # (n, 2) wall ends
-        d = sign * tan  # outward directions
-        denom = d @ nor.T  # (n, n): d_a . n_b
-        with np.errstate(divide="ignore", invalid="ignore"):
-            s = (off[None, :] - p @ nor.T) / denom  # distance along d_a to line b
-            x = p[:, None, :] + s[..., None] * d[:, None, :]
-        ub = np.einsum("abk,bk->ab", x, tan)
+        denom, s, ub = end_crossings(tan, nor, off, ends, sign)
         outside = np.maximum(lo[None, :] - ub, ub - hi[None, :])  # beyond b's scanned span
         crossing = (np.abs(denom) >= np.sin(np.radians(MIN_MEETING_ANGLE_DEG))) & (s >= -1e-9) & (s <= gap_m)
         # a run to a wall scanned (nearly) that far: a corner rounded off (up to corner_m), a

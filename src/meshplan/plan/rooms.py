@@ -34,7 +34,7 @@ from ..geometry import FloatArray, Mesh
 from ..orient import Orientation, Story, slab_faces
 from ..units import FOOT_M
 from ..walls import FlatWalls
-from .closure import close_walls, straighten
+from .closure import MIN_MEETING_ANGLE_DEG, close_walls, end_crossings, straighten
 from .params import PlanParams
 
 #: Where the scanned floor closes a room, its outline loses notches and spikes narrower than
@@ -208,14 +208,8 @@ def extend_walls(walls: FlatWalls, index: np.ndarray, reach_m: float) -> tuple[F
     tan, nor, off = walls.tangent[index], walls.normal[index], walls.offset[index]
     lo_b, hi_b = walls.u_min[index] - reach_m, walls.u_max[index] + reach_m
     for sign, ends in ((-1.0, walls.u_min[index]), (1.0, walls.u_max[index])):
-        p = ends[:, None] * tan + off[:, None] * nor  # (n, 2) wall ends
-        d = sign * tan  # outward directions
-        denom = d @ nor.T  # (n, n): d_a . n_b
-        with np.errstate(divide="ignore", invalid="ignore"):
-            s = (off[None, :] - p @ nor.T) / denom  # distance along d_a to line b
-            x = p[:, None, :] + s[..., None] * d[:, None, :]
-        ub = np.einsum("abk,bk->ab", x, tan)
-        ok = (np.abs(denom) >= np.sin(np.radians(20.0))) & (s >= -1e-9) & (s <= reach_m) & (ub >= lo_b[None, :]) & (ub <= hi_b[None, :])
+        denom, s, ub = end_crossings(tan, nor, off, ends, sign)
+        ok = (np.abs(denom) >= np.sin(np.radians(MIN_MEETING_ANGLE_DEG))) & (s >= -1e-9) & (s <= reach_m) & (ub >= lo_b[None, :]) & (ub <= hi_b[None, :])
         np.fill_diagonal(ok, False)
         best = np.where(ok, s, np.inf).min(axis=1)
         hit = np.isfinite(best)

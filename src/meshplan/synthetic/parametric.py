@@ -19,7 +19,7 @@ import numpy as np
 import shapely
 from shapely.geometry import Polygon
 
-from ..geometry import FloatArray, IntArray
+from ..geometry import BOX_CORNERS, BOX_FACES, FloatArray, IntArray
 from .fixtures import Leaf, item_bounds
 from .furniture import Item
 from .layout import Building, Wall
@@ -29,19 +29,6 @@ from .tessellate import SURFACE_KINDS, Box
 OPENING_MODES = ("boxes", "holes")
 
 _UP = np.array([0.0, 1.0, 0.0])
-# the 12 triangles of a box, outward, over the corners indexed by (x, y, z) bits
-_CORNERS = np.array([[i, j, k] for i in (0, 1) for j in (0, 1) for k in (0, 1)], dtype=np.float64) * 2.0 - 1.0
-_BOX_FACES = np.array(
-    [
-        [0, 1, 3], [0, 3, 2],  # -x
-        [4, 6, 7], [4, 7, 5],  # +x
-        [0, 4, 5], [0, 5, 1],  # -y
-        [2, 3, 7], [2, 7, 6],  # +y
-        [0, 2, 6], [0, 6, 4],  # -z
-        [1, 5, 7], [1, 7, 3],  # +z
-    ],
-    dtype=np.int64,
-)
 
 
 def box_triangles(center: FloatArray, half: FloatArray, rotation: FloatArray) -> tuple[FloatArray, IntArray]:
@@ -50,10 +37,10 @@ def box_triangles(center: FloatArray, half: FloatArray, rotation: FloatArray) ->
     r = np.asarray(rotation, dtype=np.float64)
     if np.linalg.det(r) < 0:  # keep the triangles outward
         r = r * np.array([1.0, 1.0, -1.0])
-    verts = np.asarray(center, dtype=np.float64) + (_CORNERS * np.asarray(half, dtype=np.float64)) @ r.T
-    t = verts[_BOX_FACES]
+    verts = np.asarray(center, dtype=np.float64) + (2.0 * BOX_CORNERS * np.asarray(half, dtype=np.float64)) @ r.T
+    t = verts[BOX_FACES]
     area = 0.5 * np.linalg.norm(np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]), axis=1)
-    return verts, _BOX_FACES[area > 1e-12]
+    return verts, BOX_FACES[area > 1e-12]
 
 
 def _wall_box(w: Wall, u0: float, u1: float, y0: float, y1: float, thickness: float) -> tuple[FloatArray, FloatArray, FloatArray]:
