@@ -21,8 +21,6 @@ import sys
 import time
 from pathlib import Path
 
-import numpy as np
-
 ROOT = Path(__file__).resolve().parents[1]
 OUT = ROOT / "bench-out"
 PAPER = {"orient": 24.08, "walls": 81.5, "slice_draw": 0.9, "total": 24.08 + 81.5 + 0.9}
@@ -86,6 +84,15 @@ def in_process(path: Path, repeats: int = 3) -> None:
     t0 = time.perf_counter()
     files = render_files(r)
     record("render every file (no disk)", time.perf_counter() - t0)
+    from meshplan.export.gbxml import gbxml_bytes
+
+    gbxml_bytes(r)  # imports
+    times = []
+    for _ in range(3):
+        t0 = time.perf_counter()
+        gbxml_bytes(r)
+        times.append(time.perf_counter() - t0)
+    record("gbXML energy model", statistics.median(times), 0.2)
     if "report.html" in files:
         size = len(files["report.html"]) / 1e6
         print(f"  report.html: {size:.1f} MB (target < 15 MB) {'ok' if size < 15 else 'MISSED'}")
