@@ -2,8 +2,8 @@
 
     python scripts/gallery.py --scans ../shared/scans --truth ../shared/truth --output gallery-out
 
-(``make gallery``). For each scan in ``--scans`` (``*.su_planes.ply`` sidecars are not scans;
-``.usdz`` files, which meshplan cannot read yet, are listed as skipped) it runs ``meshplan run``
+(``make gallery``). For each scan in ``--scans`` (``*.su_planes.ply`` sidecars are not scans
+and are listed as skipped) it runs ``meshplan run``
 into ``<output>/runs/<stem>/``, scores ``plan.json`` against ``<truth>/<stem>.truth.json`` where
 there is one (:mod:`meshplan.evaluate_real`), and writes
 
@@ -37,7 +37,9 @@ MESH_SUFFIXES = {".obj", ".ply", ".glb", ".gltf", ".stl", ".off"}
 #: Files beside the scans that are not scans of their own: the HoloLens 2 device's plane quads.
 SIDECAR_SUFFIX = ".su_planes.ply"
 #: Formats meshplan cannot read yet, listed as skipped with this reason.
-UNREADABLE = {".usdz": "USDZ (RoomPlan) is not read by meshplan yet"}
+#: Extensions of files in the scans folder that are not scans meshplan reads (none today: USDZ
+#: is read since issue 14); kept so that a new kind of sidecar can be listed as skipped.
+UNREADABLE: dict[str, str] = {}
 #: Longest a single scan may take (s) before it is recorded as failed.
 RUN_TIMEOUT_S = 900
 #: The contact sheet's size (inches) and resolution.
