@@ -18,6 +18,9 @@ Matching rules
   at least 0.5.
 * A computed opening matches a true opening of the same kind whose centre is within 30 cm and
   whose wall faces the same way.
+* A computed stair matches the true stair of its story whose footprint it overlaps most, at an
+  intersection over union of at least 0.5; its riser count, rise and the stories it connects are
+  compared (a synthetic stair joins its story to the next).
 """
 
 from __future__ import annotations
@@ -34,6 +37,7 @@ WALL_OFFSET_M = 0.10
 WALL_OVERLAP = 0.5
 ROOM_IOU = 0.5
 OPENING_DISTANCE_M = 0.30
+STAIR_IOU = 0.5
 
 
 def truth_to_plan(plan: dict, truth: dict) -> np.ndarray:
@@ -218,6 +222,59 @@ def opening_scores(plan_openings: list[dict], plan_walls: list[dict], truth: dic
     }
 
 
+def stair_scores(plan_stairs: list[dict], truth: dict, p: np.ndarray) -> dict[str, Any]:
+    """Per true stair: the matching computed stair's footprint IoU, riser count, rise error and
+    the stories it connects; with precision and recall."""
+    from shapely.geometry import Polygon
+
+    from .synthetic.truth import stair_footprint
+
+    computed = [(s, Polygon(s["footprint"]).buffer(0)) for s in plan_stairs]
+    used: set[int] = set()
+    rows = []
+    for t in truth.get("stairs", []):
+        floor = truth["stories"][t["story"]]["floor"]
+        poly = Polygon(_map_xz(p, stair_footprint(t), floor)).buffer(0)
+        best, best_iou = None, 0.0
+        for k, (s, sp) in enumerate(computed):
+            if s["story"] != t["story"] or k in used or not sp.intersects(poly):
+                continue
+            iou = sp.intersection(poly).area / sp.union(poly).area
+            if iou > best_iou:
+                best, best_iou = k, iou
+        match = computed[best][0] if best is not None and best_iou >= STAIR_IOU else None
+        if match is not None and best is not None:
+            used.add(best)
+        rows.append(
+            {
+                "story": t["story"],
+                "to_story": t["story"] + 1,
+                "true_risers": t["risers"],
+                "true_rise": t["rise"],
+                "iou": best_iou,
+                "found": match is not None,
+                "risers": match["risers"] if match else None,
+                "risers_exact": match is not None and match["risers"] == t["risers"],
+                "rise_error_m": abs(match["rise"] - t["rise"]) if match else None,
+                "connects": match is not None and match["to_story"] == t["story"] + 1,
+            }
+        )
+    found = sum(r["found"] for r in rows)
+    errs = [r["rise_error_m"] for r in rows if r["rise_error_m"] is not None]
+    return {
+        "rows": rows,
+        "found": found,
+        "true": len(rows),
+        "computed": len(computed),
+        "precision": len(used) / len(computed) if computed else (1.0 if not rows else 0.0),
+        "recall": found / len(rows) if rows else 1.0,
+        "risers_exact": sum(r["risers_exact"] for r in rows),
+        "connects": sum(r["connects"] for r in rows),
+        "min_iou": min((r["iou"] for r in rows), default=None),
+        "max_rise_error_m": max(errs) if errs else None,
+    }
+
+
 def evaluate(plan: dict, truth: dict) -> dict[str, Any]:
     """Every score of a result against ground truth (JSON-ready).
 
@@ -257,6 +314,8 @@ def evaluate(plan: dict, truth: dict) -> dict[str, Any]:
     if "openings" in plan:
         report["doors"] = opening_scores(plan["openings"], plan_walls, truth, p, "door")
         report["windows"] = opening_scores(plan["openings"], plan_walls, truth, p, "window")
+    if "stairs" in plan:
+        report["stairs"] = stair_scores(plan["stairs"], truth, p)
     return report
 
 
@@ -300,4 +359,12 @@ def format_report(report: dict) -> str:
             d = report[kind]
             werr = f"{d['median_width_error_m'] * 100:.1f} cm" if d["median_width_error_m"] is not None else "-"
             lines.append(f"{kind:<8} {d['found']} found, {d['true']} true: precision {d['precision']:.2f}, recall {d['recall']:.2f}, median width error {werr}")
+    if "stairs" in report:
+        s = report["stairs"]
+        iou = f"{s['min_iou']:.2f}" if s["min_iou"] is not None else "-"
+        rerr = f"{s['max_rise_error_m'] * 100:.1f} cm" if s["max_rise_error_m"] is not None else "-"
+        lines.append(
+            f"stairs   {s['found']}/{s['true']} found ({s['computed']} computed): risers exact {s['risers_exact']}, "
+            f"connecting the right stories {s['connects']}, footprint IoU >= {iou}, rise error <= {rerr}"
+        )
     return "\n".join(lines)

@@ -15,8 +15,9 @@ from .geometry import Annotations, Mesh
 from .io import LoadStats
 from .options import RunOptions
 from .orient import assign_faces
-from .plan import drafting, find_openings, find_rooms, pen_and_ink
+from .plan import drafting, find_openings, find_rooms, find_stairs, pen_and_ink
 from .plan.elements import RoomEdit, mark_low_confidence, name_rooms, opening_elements, type_rooms, wall_elements
+from .plan.stairs import attach_rooms
 from .result import PAPER_FACES, PAPER_TIMINGS_S, STAGES, Progress, Result, StoryPlans, _Timer
 from .updown import WEAK_SIGN_EVIDENCE, settle_up
 from .updown import up_by_doors as _up_by_doors
@@ -117,7 +118,10 @@ def compute(
         rooms = name_rooms(rooms, room_edits)
         physical = wall_elements(physical, rooms, orientation.stories, options.walls.floor_reach_m, options.walls.ceiling_reach_m)
         elements = opening_elements(openings, walls, physical, rooms, orientation.stories, plan_mesh)
-        rooms = type_rooms(rooms, elements, openings.kind, plan_mesh, orientation.stories)
+        # stairs from the stepped horizontal surfaces; the rooms holding them are stairwells
+        stairs = find_stairs(plan_mesh, orientation.stories, options.plan.drafting_height_m, options.orient.slab_tolerance_m)
+        rooms = type_rooms(rooms, elements, openings.kind, plan_mesh, orientation.stories, stairs)
+        stairs = attach_rooms(stairs, rooms)
     with timer.stage("slice_draw"):
         ann_story = assign_faces(plan_annotations.positions[:, 1], orientation.stories) if len(plan_annotations) else np.zeros(0, np.int64)
         plans = []
@@ -156,4 +160,5 @@ def compute(
         warnings=tuple(warnings),
         annotation_story=ann_story,
         opening_elements=elements,
+        stairs=stairs,
     )

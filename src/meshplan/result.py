@@ -24,6 +24,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from .orient import Orientation, Story
     from .plan import DraftingPlan, Openings, PenAndInkPlan, Room
     from .plan.elements import OpeningElement
+    from .plan.stairs import StairElement
     from .walls import FlatWalls, PhysicalWall
 
 #: The stage timings are logged on the package's logger ("DEBUG meshplan: stage orient: ..."
@@ -95,6 +96,9 @@ class Result:
     opening_elements
         Per opening (row of ``openings``): its physical wall, clear sizes, the rooms it
         connects, its leaf and a confidence (:class:`meshplan.plan.elements.OpeningElement`).
+    stairs
+        The stairs found in the stepped horizontal surfaces, with the stories and rooms they
+        connect and the void over each in the upper floor (:class:`meshplan.plan.stairs.StairElement`).
     """
 
     input: LoadStats
@@ -113,6 +117,7 @@ class Result:
     warnings: tuple[str, ...] = ()
     annotation_story: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
     opening_elements: tuple[OpeningElement, ...] = ()
+    stairs: tuple[StairElement, ...] = ()
 
     def __post_init__(self) -> None:
         # a copy of each: the timer and the caller keep theirs

@@ -226,6 +226,7 @@ def ifc_bytes(result: Result) -> bytes:
             sensor.ObjectType = "thermostat sensor"
             geometry.edit_object_placement(f, product=sensor, matrix=matrix)
             aggregate.assign_object(f, products=[sensor], relating_object=item)
+    _add_stairs(f, result, storeys, body)
     _make_deterministic(f)
     return f.to_string().encode("utf-8")
 
@@ -334,6 +335,70 @@ def _annotation_pset(f, pset, el, label: str, kind: str, p, d, detected: bool) -
     if d is not None:
         props.update(probe_x=float(d[0]), probe_y=float(-d[2]), probe_z=float(d[1]))
     pset.edit_pset(f, pset=ps, properties=props)
+
+
+#: IfcStairTypeEnum of each stair shape (:class:`meshplan.plan.stairs.StairElement`).
+STAIR_TYPES = {"straight": "STRAIGHT_RUN_STAIR", "L": "QUARTER_TURN_STAIR", "U": "HALF_TURN_STAIR", "winding": "NOTDEFINED"}
+
+
+def _add_stairs(f, result: Result, storeys: dict, body) -> None:
+    """An IfcStair per stair in the storey it starts on, aggregating an IfcStairFlight per
+    flight and an IfcSlab (LANDING) per landing, each tread a block one rise deep below its
+    height; Pset_StairCommon and a ``meshplan`` property set with what it connects."""
+    from ifcopenshell.api import aggregate, geometry, pset, root, spatial
+
+    def block(tread, depth: float):
+        pts = [f.createIfcCartesianPoint(_ifc_xy(p)) for p in list(tread.polygon.exterior.coords)]
+        profile = f.createIfcArbitraryClosedProfileDef("AREA", None, f.createIfcPolyline(pts))
+        at = f.createIfcAxis2Placement3D(f.createIfcCartesianPoint((0.0, 0.0, float(tread.height) - depth)), None, None)
+        return f.createIfcExtrudedAreaSolid(profile, at, f.createIfcDirection((0.0, 0.0, 1.0)), float(depth))
+
+    def shape(product, treads, depth: float, parent) -> None:
+        rep = f.createIfcShapeRepresentation(body, "Body", "SweptSolid", [block(t, depth) for t in treads])
+        geometry.assign_representation(f, product=product, representation=rep)
+        # at the stair's placement, made here: the API's placement edits are not repeatable
+        at = f.createIfcAxis2Placement3D(f.createIfcCartesianPoint((0.0, 0.0, 0.0)), None, None)
+        product.ObjectPlacement = f.createIfcLocalPlacement(parent.ObjectPlacement, at)
+
+    room_no = [r.number or r.label for r in result.rooms]
+    for k, s in enumerate(result.stairs):
+        st, _ = storeys[s.story]
+        stair = root.create_entity(f, ifc_class="IfcStair", name=f"Stair {k + 1}", predefined_type=STAIR_TYPES.get(s.shape, "NOTDEFINED"))
+        geometry.edit_object_placement(f, product=stair, matrix=_placement((0.0, 0.0), 0.0))
+        spatial.assign_container(f, products=[stair], relating_structure=st)
+        parts = []
+        for i, fl in enumerate(s.flights):
+            flight = root.create_entity(f, ifc_class="IfcStairFlight", name=f"Stair {k + 1} flight {i + 1}", predefined_type="STRAIGHT")
+            flight.NumberOfRisers, flight.NumberOfTreads = int(fl.risers), len(fl.treads)
+            flight.RiserHeight, flight.TreadLength = float(s.rise), float(fl.going)
+            shape(flight, [s.treads[j] for j in fl.treads], s.rise, stair)
+            parts.append(flight)
+        for i, t in enumerate(x for x in s.treads if x.landing):
+            landing = root.create_entity(f, ifc_class="IfcSlab", name=f"Stair {k + 1} landing {i + 1}", predefined_type="LANDING")
+            shape(landing, [t], s.rise, stair)
+            parts.append(landing)
+        if parts:
+            aggregate.assign_object(f, products=parts, relating_object=stair)
+        ps = pset.add_pset(f, product=stair, name="Pset_StairCommon")
+        pset.edit_pset(
+            f, pset=ps,
+            properties={
+                "NumberOfRiser": int(s.risers), "NumberOfTreads": max(int(s.risers) - 1, 0), "RiserHeight": float(s.rise),
+                "TreadLength": float(s.going), "Reference": "meshplan",
+            },
+        )
+        ps = pset.add_pset(f, product=stair, name="meshplan")
+        props: dict[str, Any] = {"story": int(s.story), "shape": s.shape, "treads_found": len(s.treads)}
+        props.update(confidence=s.confidence, confidence_reason=s.confidence_reason)
+        if s.to_story is not None:
+            props["to_story"] = int(s.to_story)
+        if s.room is not None:
+            props["room"] = room_no[s.room]
+        if s.room_above is not None:
+            props["room_above"] = room_no[s.room_above]
+        if s.void is not None:
+            props["void_area"] = float(s.void.area)
+        pset.edit_pset(f, pset=ps, properties=props)
 
 
 def _make_deterministic(f) -> None:

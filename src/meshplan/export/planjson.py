@@ -63,6 +63,8 @@ def plan_document(result: Result) -> dict[str, Any]:
             dict(o, **(result.opening_elements[i].to_dict(_NC) if i < len(result.opening_elements) else {}))
             for i, o in enumerate(result.openings.to_list(result.walls, _NC))
         ],
+        "stairs": [s.to_dict(_NC) for s in result.stairs],
+        "voids": _voids(result),
         "annotations": [
             dict(item, story=int(result.annotation_story[i]))
             for i, item in enumerate(result.annotations.to_list(_NC))
@@ -98,6 +100,19 @@ def plan_document(result: Result) -> dict[str, Any]:
         "timings": {k: round(float(v), 4) for k, v in result.timings.items()},
     }
     return doc
+
+
+def _voids(result: Result) -> list[dict[str, Any]]:
+    """The holes in the floors: over each stair, in the floor of the story it arrives at."""
+    out = []
+    for k, s in enumerate(result.stairs):
+        if s.void is None or s.to_story is None:
+            continue
+        xy = np.asarray(s.void.exterior.coords)[:-1]
+        out.append(
+            {"story": s.to_story, "kind": "stair", "stair": k, "polygon": _r(xy), "area": round(float(s.void.area), _NC), "source": s.void_source}
+        )
+    return out
 
 
 def _carriers(result: Result) -> list[int]:

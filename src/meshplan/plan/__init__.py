@@ -6,6 +6,7 @@ from .openings import Openings, find_openings
 from .params import PlanParams
 from .peninink import PenAndInkPlan, pen_and_ink
 from .rooms import Room, find_rooms
+from .stairs import StairElement, find_stairs
 
 __all__ = [
     "DraftingPlan",
@@ -13,8 +14,10 @@ __all__ = [
     "PenAndInkPlan",
     "PlanParams",
     "Room",
+    "StairElement",
     "drafting",
     "find_openings",
     "find_rooms",
+    "find_stairs",
     "pen_and_ink",
 ]

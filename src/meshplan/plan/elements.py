@@ -46,6 +46,7 @@ from ..walls.physical import wall_of_face
 from .drafting import DraftingPlan
 from .openings import Openings
 from .rooms import Room
+from .stairs import StairElement
 
 # --------------------------------------------------------------------------------------------
 # Thresholds (metres, square metres, degrees), each with its reason
@@ -98,6 +99,10 @@ STAIR_GOING_MIN_M = 0.12
 #: A room above a stair of the story below, overlapping it by this share of the smaller, is the
 #: stair's upper end (its floor has the stairwell's opening).
 STAIR_ABOVE_SHARE = 0.3
+#: A room holding most of a found stair's footprint (:mod:`meshplan.plan.stairs`) is its stairwell
+#: when the stair covers at least this share of it: a living room with a stair in a corner stays
+#: a room.
+STAIR_ROOM_SHARE = 0.25
 
 #: A computed room takes the name of a rooms.json room it overlaps by at least this intersection
 #: over union: a re-run moves walls by centimetres, not by half a room.
@@ -635,9 +640,11 @@ def opening_elements(
 
 
 def type_rooms(
-    rooms: tuple[Room, ...], elements: tuple[OpeningElement, ...], kinds: tuple[str, ...], mesh: Mesh, stories: tuple[Story, ...]
+    rooms: tuple[Room, ...], elements: tuple[OpeningElement, ...], kinds: tuple[str, ...], mesh: Mesh, stories: tuple[Story, ...],
+    stairs: tuple[StairElement, ...] = (),
 ) -> tuple[Room, ...]:
-    """The rooms with their type (a rooms.json type is kept) and confidence."""
+    """The rooms with their type (a rooms.json type is kept) and confidence; a room holding one of
+    the ``stairs`` found (:func:`meshplan.plan.stairs.find_stairs`) is a stairwell."""
     doors = [0] * len(rooms)
     for e, kind in zip(elements, kinds):
         if kind != "door":
@@ -647,8 +654,11 @@ def type_rooms(
     out = []
     for i, r in enumerate(rooms):
         level, why = ROOM_CONFIDENCE.get(r.closed_by, ("low", r.closed_by))
+        held = [s for s in stairs if s.story == r.story and _holds_stair(r, s.footprint)]
         if r.type_reason == "rooms.json":
             kind, reason = r.type, "rooms.json"
+        elif held:
+            kind, reason = "stair", f"holds a stair of {held[0].risers} risers"
         else:
             kind, reason = room_type(r, doors[i], stair_steps(mesh, r.polygon, stories[r.story]))
         out.append(replace(r, type=kind, type_reason=reason, confidence=level, confidence_reason=why))
@@ -663,6 +673,12 @@ def type_rooms(
                     out[i] = replace(r, type="stair", type_reason=f"above the stair {below.number or below.label}")
                     break
     return tuple(out)
+
+
+def _holds_stair(room: Room, footprint: Polygon) -> bool:
+    """The room holds most of the stair and the stair a good share of it (its stairwell)."""
+    common = room.polygon.intersection(footprint).area
+    return common >= 0.5 * footprint.area and footprint.area >= STAIR_ROOM_SHARE * room.area
 
 
 def rooms_document(rooms: tuple[Room, ...], ndigits: int = 4) -> dict[str, Any]:

@@ -37,6 +37,22 @@ def _rect_polygon(rect: tuple[float, float, float, float]) -> list[list[float]]:
     return [[x0, z0], [x0, z1], [x1, z1], [x1, z0]]
 
 
+#: The slab opening over a synthetic stair is its outline grown by this much on every side
+#: (:func:`meshplan.synthetic.layout._stair`), so the stair's footprint is the opening less it.
+STAIR_OPENING_MARGIN_M = 0.03
+
+
+def stair_footprint(stair: dict) -> list[list[float]]:
+    """The plan footprint of a truth stair (``truth["stairs"][i]``, truth frame): its own
+    ``footprint`` where given, else its slab ``opening`` less :data:`STAIR_OPENING_MARGIN_M` (the
+    truth files keep their bytes: the footprint is derived, not stored)."""
+    if "footprint" in stair:
+        return [list(map(float, p)) for p in stair["footprint"]]
+    xz = np.asarray(stair["opening"], dtype=np.float64)
+    (x0, z0), (x1, z1) = xz.min(axis=0) + STAIR_OPENING_MARGIN_M, xz.max(axis=0) - STAIR_OPENING_MARGIN_M
+    return [[float(v) for v in p] for p in _rect_polygon((x0, x1, z0, z1))]
+
+
 def build_truth(
     params,
     b: Building,
