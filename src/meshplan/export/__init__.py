@@ -45,13 +45,15 @@ __all__ = ["RenderPool", "Written", "dumps", "plan_document", "plan_schema", "re
 # result existed (see RenderPool).
 
 
-def _pen_files(plan, annotations, sheet, params, n_stories: int, fmts: tuple[str, ...]) -> dict[str, bytes]:
-    fig = pen_and_ink_figure(plan, annotations, sheet, params, n_stories)
+def _pen_files(plan, annotations, sheet, params, n_stories: int, fmts: tuple[str, ...], scan: str = "", north_deg: float = 0.0) -> dict[str, bytes]:
+    fig = pen_and_ink_figure(plan, annotations, sheet, params, n_stories, scan=scan, north_deg=north_deg)
     return {f"pen-and-ink-{plan.story.index}.{fmt}": figure_bytes(fig, fmt) for fmt in fmts}
 
 
-def _drafting_files(plan, annotations, sheet, params, n_stories: int, symbols, fmts: tuple[str, ...]) -> dict[str, bytes]:
-    fig = drafting_figure(plan, annotations, sheet, params, n_stories, symbols)
+def _drafting_files(
+    plan, annotations, sheet, params, n_stories: int, symbols, fmts: tuple[str, ...], scan: str = "", north_deg: float = 0.0
+) -> dict[str, bytes]:
+    fig = drafting_figure(plan, annotations, sheet, params, n_stories, symbols, scan=scan, north_deg=north_deg)
     return {f"drafting-{plan.story.index}.{fmt}": figure_bytes(fig, fmt) for fmt in fmts}
 
 
@@ -92,8 +94,10 @@ def _jobs(result: Result) -> tuple[list[tuple], list[tuple]]:
         i = sp.story.index
         sheet = make_sheet(mesh.face_centroids[o.face_story == i][:, [0, 2]], params)
         symbols = plan_symbols(i, result.walls, result.openings, result.rooms, result.physical_walls, params.imperial)
-        jobs.append((_pen_files, sp.pen_and_ink, sp.annotations, sheet, params, n, ("png", "svg", "pdf")))
-        jobs.append((_drafting_files, sp.drafting, sp.annotations, sheet, params, n, symbols, ("png", "svg", "pdf")))
+        # the title block names the scan file (not its directory) and the north arrow follows --north-deg
+        scan, north = Path(result.input.path).name, result.options.export.north_deg
+        jobs.append((_pen_files, sp.pen_and_ink, sp.annotations, sheet, params, n, ("png", "svg", "pdf"), scan, north))
+        jobs.append((_drafting_files, sp.drafting, sp.annotations, sheet, params, n, symbols, ("png", "svg", "pdf"), scan, north))
         jobs.append((_segments_files, mesh.face_centroids, result.walls, i, sheet, params, n))
         faces = np.flatnonzero(o.face_story == i)
         reference = slice_mesh(mesh.triangles[faces], np.array([sp.drafting.height])).segments

@@ -44,7 +44,7 @@ def drafting_dxf(
     as circles and probe lines on ANNOTATIONS and their labels on TEXT; with ``symbols``
     (:class:`meshplan.plan.symbols.PlanSymbols`) and ``rooms``, room outlines and labels on
     ROOMS (low-confidence rooms dashed on LOW_CONFIDENCE), DIMENSION entities on DIMENSIONS, door leaves and swings on DOORS and window sashes
-    on WINDOWS.
+    on WINDOWS, and the walls as solids (outlines and a solid HATCH, openings cut out) on WALLS.
 
     Segments are ``(S, 2, 2)`` arrays of plan points [x, z] in metres.
     """
@@ -78,6 +78,7 @@ def drafting_dxf(
         low = getattr(room, "confidence", "") == "low"
         msp.add_lwpolyline(outline, close=True, dxfattribs={"layer": "LOW_CONFIDENCE" if low else "ROOMS", "linetype": "DASHED" if low else "BYLAYER"})
     if symbols is not None:
+        _wall_solids(msp, getattr(symbols, "wall_solids", ()))
         for seg in symbols.door_leaves:
             msp.add_line(_p(seg[0]), _p(seg[1]), dxfattribs={"layer": "DOORS"})
         for a in symbols.door_arcs:
@@ -101,6 +102,26 @@ def drafting_dxf(
         pts = np.concatenate([np.asarray(wall_segments).reshape(-1, 2), np.asarray(slice_segments).reshape(-1, 2), np.zeros((1, 2))])
         msp.add_text(title, height=0.25, dxfattribs={"layer": "TEXT"}).set_placement((float(pts[:, 0].min()), float(-pts[:, 1].min()) + 0.5))
     return _reproducible_bytes(doc)
+
+
+def _wall_solids(msp, solids) -> None:
+    """The cut walls as solids on WALLS: each wall's outline (openings cut out) as closed
+    polylines and a solid HATCH (poche), exterior walls with a heavier outline; walls of low
+    confidence outlined on LOW_CONFIDENCE, not filled."""
+    for w in solids:
+        layer = "LOW_CONFIDENCE" if w.low else "WALLS"
+        weight = 50 if w.exterior else 25
+        polys = [g for g in getattr(w.polygon, "geoms", [w.polygon]) if g.geom_type == "Polygon" and not g.is_empty]
+        for poly in polys:
+            rings = [poly.exterior, *poly.interiors]
+            for ring in rings:
+                msp.add_lwpolyline([_p(c) for c in list(ring.coords)[:-1]], close=True, dxfattribs={"layer": layer, "lineweight": weight})
+            if w.low:
+                continue
+            hatch = msp.add_hatch(color=250 if w.exterior else 8, dxfattribs={"layer": "WALLS"})
+            hatch.paths.add_polyline_path([_p(c) for c in list(poly.exterior.coords)[:-1]], is_closed=True, flags=1)
+            for ring in poly.interiors:
+                hatch.paths.add_polyline_path([_p(c) for c in list(ring.coords)[:-1]], is_closed=True, flags=0)
 
 
 def _literal_text(text: str) -> str:

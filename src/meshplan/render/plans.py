@@ -2,21 +2,50 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from ..geometry import Annotations
 from ..plan import DraftingPlan, PenAndInkPlan
 from ..plan.elements import MarkedDrafting
-from ..plan.symbols import PlanSymbols
+from ..plan.symbols import PlanSymbols, format_area, format_length
 from ..validation import PLAIN_TEXT_KW, plain_text
 from ..walls import FlatWalls
 from .params import RenderParams
-from .sheet import Sheet, draw_annotations, draw_scale_bar, ink_rgba, new_figure, place_raster, rasterize_segments
+from .placement import Placer, Spot, arc_line, tag, with_halo
+from .sheet import (
+    Sheet,
+    annotation_obstacles,
+    draw_annotations,
+    draw_legend,
+    draw_north_arrow,
+    draw_scale_bar,
+    draw_title_block,
+    format_feet_inches,
+    ink_rgba,
+    new_figure,
+    place_raster,
+    rasterize_segments,
+)
 
 WALL_COLOR = "#111111"
-DIM_COLOR = "#6a6a6a"
-ROOM_TINT = "#eef3f8"
-ROOM_EDGE = "#8aa0b8"
+#: The cut walls (poche): exterior walls black, interior walls dark grey.
+POCHE_EXTERIOR = "#1a1a1a"
+POCHE_INTERIOR = "#5c5c5c"
+WINDOW_COLOR = "#1a1a1a"
+DIM_COLOR = "#3d3d3d"
+#: Dimension text in points of paper (about 2 mm high whatever the scale), and where the
+#: chains run outside the building (millimetres of paper from its outermost face).
+DIM_TEXT_PT = 5.5
+DIM_FIRST_MM = 8.0
+DIM_STEP_MM = 6.0
+#: Room labels from this size down to the last, the largest that fits the room.
+ROOM_LABEL_SIZES = (7.5, 6.5, 5.5, 4.5)
+ROOM_TINT = "#f3f1ec"
+ROOM_EDGE = "#b9b2a4"
+#: Light tints of the room types (:attr:`meshplan.plan.rooms.Room.type`).
+ROOM_TINTS = {"room": "#f5f2ea", "corridor": "#e9ecef", "stair": "#e3ecf5", "closet": "#efe6d6", "open": "#e8f1e4"}
 #: Low-confidence walls, rooms and openings (``plan.elements.MarkedDrafting``) are drawn dashed
 #: in this colour, as RoomPlan draws what it is unsure of, so that a reader checks them.
 LOW_CONFIDENCE_COLOR = "#c0392b"
@@ -40,18 +69,38 @@ def pen_and_ink_raster(plan: PenAndInkPlan, sheet: Sheet, params: RenderParams) 
     return ink_rgba(counts, params.opacity)
 
 
-def pen_and_ink_figure(plan: PenAndInkPlan, annotations: Annotations, sheet: Sheet, params: RenderParams, n_stories: int = 1):
+def _story_name(story, n_stories: int, imperial: bool) -> str:
+    f = format_feet_inches if imperial else (lambda v: f"{v:.2f} m")
+    where = f"{story.index} of {n_stories}" if n_stories > 1 else "the only one"
+    return f"{where} (floor {f(story.floor)}, ceiling {f(story.ceiling)})"
+
+
+def pen_and_ink_figure(
+    plan: PenAndInkPlan, annotations: Annotations, sheet: Sheet, params: RenderParams, n_stories: int = 1, *, scan: str = "", north_deg: float = 0.0
+):
     """All slices overlaid in translucent ink (:func:`pen_and_ink_raster`); what stands at many
-    heights is dark. One figure serves every format it is saved in."""
+    heights is dark. The annotations are drawn above the ink, their labels on a white halo.
+    One figure serves every format it is saved in."""
     s = plan.story
     n = len(plan.slices.heights) - 1
     title = _story_title(f"Pen-and-ink ({n} slices, opacity {params.opacity:g})", s.index, n_stories, s.floor, s.ceiling, params.imperial)
     fig, ax = new_figure(sheet, title, params)
     ax.patch.set_alpha(0.0)  # the ink sits under the axes
     place_raster(fig, ax, pen_and_ink_raster(plan, sheet, params))
-    draw_annotations(ax, annotations.labels, annotations.kinds, annotations.positions, annotations.directions)
-    draw_scale_bar(fig, sheet, params)
+    kinds = draw_annotations(ax, annotations.labels, annotations.kinds, annotations.positions, annotations.directions, legend=False)
+    _draw_sheet(fig, sheet, params, f"Pen-and-ink plan, {n} slices", _story_name(s, n_stories, params.imperial), scan, north_deg, kinds)
     return fig
+
+
+def _draw_sheet(fig, sheet: Sheet, params: RenderParams, drawing: str, story: str, scan: str, north_deg: float, legend: list) -> None:
+    draw_scale_bar(fig, sheet, params)
+    draw_north_arrow(fig, north_deg)
+    draw_legend(fig, [h for h, _ in legend], [n for _, n in legend])
+    draw_title_block(fig, sheet, params, drafting_name(drawing), story, scan)
+
+
+def drafting_name(drawing: str) -> str:
+    return drawing
 
 
 def drafting_figure(
@@ -61,40 +110,299 @@ def drafting_figure(
     params: RenderParams,
     n_stories: int = 1,
     symbols: PlanSymbols | None = None,
+    *,
+    scan: str = "",
+    north_deg: float = 0.0,
 ):
-    """The flat-wall model cut once, drawn as clean wall lines, with rooms, doors, windows and
-    dimensions."""
+    """The flat-wall model cut once, drawn as an architectural sheet: the walls as solids
+    (poche; exterior walls heavier) with the doors and windows cut through them, rooms tinted
+    by type and labelled, dimension chains outside the building and room sizes inside where
+    they fit, annotations above everything; below, the scale bar, north arrow, legend and
+    title block. No text covers another text, a line or a symbol (:mod:`.placement`).
+
+    ``scan`` (the scan's name) and ``north_deg`` (the bearing of up the page) go in the title
+    block and the north arrow."""
     from matplotlib.collections import LineCollection
-    from matplotlib.patches import Arc as ArcPatch
+    from matplotlib.lines import Line2D
 
     s = plan.story
     cut = plan.height - s.floor
-    fig, ax = new_figure(sheet, _story_title(f"Drafting (cut at {cut:.2f} m)", s.index, n_stories, s.floor, s.ceiling, params.imperial), params)
-    # list(): the stubs want a Sequence of segments, an (S, 2, 2) array iterates the same
+    cut_text = format_feet_inches(cut) if params.imperial else f"{cut:.2f} m"
+    fig, ax = new_figure(sheet, _story_title(f"Drafting (cut at {cut_text})", s.index, n_stories, s.floor, s.ceiling, params.imperial), params)
+    legend: list = []
     # a MarkedDrafting sets its low-confidence walls apart: drawn dashed
     solid = plan.solid if isinstance(plan, MarkedDrafting) else plan.slices.segments
-    ax.add_collection(LineCollection(list(solid), colors=WALL_COLOR, linewidths=1.6, capstyle="projecting", zorder=3))
+    if symbols is None or not symbols.wall_solids:
+        # list(): the stubs want a Sequence of segments, an (S, 2, 2) array iterates the same
+        ax.add_collection(LineCollection(list(solid), colors=WALL_COLOR, linewidths=1.6, capstyle="projecting", zorder=3))
     if isinstance(plan, MarkedDrafting):
         _draw_low_confidence(ax, plan)
+    lines: list = []
     if symbols is not None:
-        # rooms as a light tint with a dashed edge: where no wall closes a room (a wall the scan
-        # missed), the dashes show where it was closed from the scanned floor
-        from matplotlib.collections import PolyCollection
-
-        ax.add_collection(PolyCollection(symbols.room_outlines, facecolors=ROOM_TINT, edgecolors=ROOM_EDGE, linewidths=0.4, linestyles=(0, (3, 2)), zorder=1))
-        ax.add_collection(LineCollection(list(symbols.jambs), colors=WALL_COLOR, linewidths=0.5, zorder=3))
-        ax.add_collection(LineCollection(list(symbols.windows), colors="#1f4e99", linewidths=0.6, zorder=3))
-        ax.add_collection(LineCollection(list(symbols.door_leaves), colors=WALL_COLOR, linewidths=0.9, zorder=3))
-        for a in symbols.door_arcs:
-            ax.add_patch(ArcPatch(a.center, 2 * a.radius, 2 * a.radius, theta1=a.start_deg, theta2=a.end_deg, color=WALL_COLOR, lw=0.4, ls="--", zorder=3))
-        _draw_dimensions(ax, symbols)
-        for lab in symbols.room_labels:
-            # room labels may one day carry a user's name: drawn as plain text, lines kept
-            text = plain_text(lab.text, keep_newlines=True)
-            ax.text(*lab.position, text, ha="center", va="center", fontsize=6.5, color="#222222", zorder=4, linespacing=1.3, **PLAIN_TEXT_KW)
-    draw_annotations(ax, annotations.labels, annotations.kinds, annotations.positions, annotations.directions)
-    draw_scale_bar(fig, sheet, params)
+        legend += _draw_rooms(ax, symbols)
+        wall_lines, handles = _draw_wall_solids(ax, symbols)
+        legend += handles
+        lines += wall_lines
+        lines += _draw_openings(ax, symbols)
+        if len(symbols.door_leaves):
+            legend.append((_door_handle(), "door (leaf and swing)"))
+        if len(symbols.windows):
+            legend.append((Line2D([], [], color=WINDOW_COLOR, lw=0.5), "window"))
+    lines += annotation_obstacles(annotations.positions, annotations.directions)
+    placer = None
+    if symbols is not None:
+        chain_texts = _chain_geometry(ax, symbols, sheet, params)
+        lines += chain_texts.lines
+        placer = Placer(fig, ax, lines)
+        _place_room_labels(ax, symbols, params, placer)
+        chain_texts.place(placer)
+        _place_room_dimensions(ax, symbols, sheet, params, placer)
+    legend += draw_annotations(ax, annotations.labels, annotations.kinds, annotations.positions, annotations.directions, placer=placer, legend=False)
+    if isinstance(plan, MarkedDrafting) and (len(plan.dashed) or plan.low_rooms or len(plan.low_openings)):
+        legend.append((Line2D([], [], color=LOW_CONFIDENCE_COLOR, lw=1.0, ls=LOW_CONFIDENCE_DASH), "low confidence: check on site"))
+    _draw_sheet(fig, sheet, params, f"Drafting plan, cut at {cut_text}", _story_name(s, n_stories, params.imperial), scan, north_deg, legend)
     return fig
+
+
+# --- walls, openings and rooms -----------------------------------------------------------------
+
+
+def _path_of(geom):
+    """A matplotlib path of a shapely (multi)polygon, holes included."""
+    from matplotlib.path import Path
+
+    verts, codes = [], []
+    for poly in getattr(geom, "geoms", [geom]):
+        if poly.is_empty or poly.geom_type != "Polygon":
+            continue
+        for ring in (poly.exterior, *poly.interiors):
+            c = np.asarray(ring.coords)
+            verts.append(c)
+            codes.append(np.r_[Path.MOVETO, np.full(len(c) - 2, Path.LINETO), Path.CLOSEPOLY])
+    if not verts:
+        return None
+    return Path(np.concatenate(verts), np.concatenate(codes).astype(np.uint8))
+
+
+def _draw_wall_solids(ax, symbols: PlanSymbols) -> tuple[list, list]:
+    """The walls as solids: exterior black with a heavy outline, interior dark grey, the
+    low-confidence ones hatched in red. Returns their outlines (for texts to avoid) and the
+    legend entries."""
+    import shapely
+    from matplotlib.patches import Patch, PathPatch
+
+    styles: dict[str, dict[str, Any]] = {
+        "exterior": dict(facecolor=POCHE_EXTERIOR, edgecolor=WALL_COLOR, linewidth=0.9, zorder=4),
+        "interior": dict(facecolor=POCHE_INTERIOR, edgecolor=WALL_COLOR, linewidth=0.45, zorder=3.5),
+        "low": dict(facecolor="white", edgecolor=LOW_CONFIDENCE_COLOR, linewidth=0.6, hatch="////", linestyle=LOW_CONFIDENCE_DASH, zorder=4.5),
+    }
+    names = {"exterior": "exterior wall (cut)", "interior": "interior wall (cut)", "low": "wall of low confidence"}
+    outlines, legend = [], []
+    for kind, style in styles.items():
+        polys = [w.polygon for w in symbols.wall_solids if (w.low if kind == "low" else not w.low and (kind == "exterior") == w.exterior)]
+        if not polys:
+            continue
+        geom = shapely.union_all(polys)
+        path = _path_of(geom)
+        if path is None:
+            continue
+        ax.add_patch(PathPatch(path, **style))
+        outlines.append(geom.boundary)
+        legend.append((Patch(**{k: v for k, v in style.items() if k != "zorder"}), names[kind]))
+    return outlines, legend
+
+
+def _draw_openings(ax, symbols: PlanSymbols) -> list:
+    """Jambs, windows (frame lines in the wall's thickness), door leaves and swings; returns
+    them as lines for texts to avoid."""
+    import shapely
+    from matplotlib.collections import LineCollection
+    from matplotlib.patches import Arc as ArcPatch
+
+    ax.add_collection(LineCollection(list(symbols.jambs), colors=WALL_COLOR, linewidths=0.5, zorder=5))
+    ax.add_collection(LineCollection(list(symbols.windows), colors=WINDOW_COLOR, linewidths=0.4, zorder=5))
+    ax.add_collection(LineCollection(list(symbols.door_leaves), colors=WALL_COLOR, linewidths=1.1, zorder=5))
+    out = [shapely.LineString(seg) for seg in (*symbols.jambs, *symbols.windows, *symbols.door_leaves)]
+    for a in symbols.door_arcs:
+        ax.add_patch(ArcPatch(a.center, 2 * a.radius, 2 * a.radius, theta1=a.start_deg, theta2=a.end_deg, color=WALL_COLOR, lw=0.35, zorder=5))
+        out.append(arc_line(a.center, a.radius, a.start_deg, a.end_deg))
+    return out
+
+
+def _door_handle():
+    from matplotlib.lines import Line2D
+
+    return Line2D([], [], color=WALL_COLOR, lw=1.1)
+
+
+def _draw_rooms(ax, symbols: PlanSymbols) -> list:
+    """Rooms tinted lightly by type, with a fine dashed edge (where no wall closes a room,
+    the dashes show where it was closed from the scanned floor). Returns the legend entries."""
+    from matplotlib.collections import PolyCollection
+    from matplotlib.patches import Patch
+
+    types = symbols.room_types if len(symbols.room_types) == len(symbols.room_outlines) else ("room",) * len(symbols.room_outlines)
+    colors = [ROOM_TINTS.get(t, ROOM_TINT) for t in types]
+    ax.add_collection(PolyCollection(symbols.room_outlines, facecolors=colors, edgecolors=ROOM_EDGE, linewidths=0.3, linestyles=(0, (3, 2)), zorder=1))
+    return [(Patch(facecolor=ROOM_TINTS.get(t, ROOM_TINT), edgecolor=ROOM_EDGE, linewidth=0.3), t) for t in dict.fromkeys(types)]
+
+
+def _place_room_labels(ax, symbols: PlanSymbols, params: RenderParams, placer: Placer) -> None:
+    """Each room's name, number and area at its pole of inaccessibility, as large as fits in
+    the room (7.5 to 4.5 points), else name and number only, else moved within the room."""
+    import shapely
+
+    outlines = [shapely.Polygon(r) for r in symbols.room_outlines]
+    for k, lab in enumerate(symbols.room_labels):
+        room = outlines[k] if k < len(outlines) else None
+        inside = room.buffer(-0.02) if room is not None and room.is_valid else None
+        name = plain_text(lab.name or lab.text.split("\n")[0])
+        area = format_area(lab.area, params.imperial) if lab.area else ""
+        number = plain_text(lab.number)
+        full = f"{name}\n{number + '  ' if number else ''}{area}" if area else name
+        texts = [full, f"{name}\n{number}" if number else name, number or name]
+        spots = [lab.position]
+        if room is not None and inside is not None and not inside.is_empty:
+            spots += _inner_points(inside, lab.position)
+        candidates = [(t, size, p) for t in texts for p in spots[:1] for size in ROOM_LABEL_SIZES]
+        candidates += [(t, ROOM_LABEL_SIZES[-1], p) for t in texts for p in spots[1:]]
+
+        def make(c):
+            text, size, (x, z) = c
+            t = ax.text(
+                x, z, text, ha="center", va="center", fontsize=size, color="#1a1a1a", zorder=12, linespacing=1.25,
+                multialignment="center", **PLAIN_TEXT_KW,
+            )
+            return tag(with_halo(t, 2.0), "room-label")
+
+        def spec(c):
+            text, size, (x, z) = c
+            return Spot(x, z, text, size, linespacing=1.25)
+
+        if placer.place(make, candidates, inside=inside, spec=spec) is None and placer.place(make, candidates, spec=spec) is None:
+            continue  # nowhere free in or near the room: left out rather than drawn over lines
+
+
+def _inner_points(poly, first, n: int = 14) -> list:
+    """Points well inside ``poly`` (on a grid, deepest first), for a label that does not fit at
+    the room's pole."""
+    import shapely
+
+    x0, z0, x1, z1 = poly.bounds
+    g = np.stack(np.meshgrid(np.linspace(x0, x1, 9)[1:-1], np.linspace(z0, z1, 9)[1:-1]), -1).reshape(-1, 2)
+    pts = shapely.points(g)
+    ok = shapely.contains(poly, pts)
+    g, pts = g[ok], pts[ok]
+    depth = shapely.distance(pts, poly.exterior)
+    return [tuple(map(float, p)) for p in g[np.argsort(-depth)][:n]]
+
+
+# --- dimensions --------------------------------------------------------------------------------
+
+
+class _ChainTexts:
+    """The chains' lines (drawn at once) and their texts (placed once the room labels are)."""
+
+    def __init__(self):
+        self.lines: list = []
+        self.texts: list = []  # (make, candidates, spec)
+
+    def place(self, placer: Placer) -> None:
+        for make, candidates, spec in self.texts:
+            placer.place(make, candidates, spec=spec)
+
+
+def _dimension_text(ax, x, z, text, rotation, ha, va):
+    t = ax.text(x, z, text, fontsize=DIM_TEXT_PT, color=DIM_COLOR, ha=ha, va=va, rotation=rotation, rotation_mode="anchor", zorder=11)
+    return tag(t, "dimension")
+
+
+def _chain_geometry(ax, symbols: PlanSymbols, sheet: Sheet, params: RenderParams) -> _ChainTexts:
+    """Draw the dimension chains outside the building: each at a fixed paper distance from the
+    outermost face (8 mm, then every 6 mm), with extension lines, oblique ticks and each
+    length above its line (or beside it where it does not fit)."""
+    import shapely
+    from matplotlib.collections import LineCollection
+
+    mm = sheet.scale / 1000.0  # model metres per paper millimetre
+    out = _ChainTexts()
+    segs, ticks = [], []
+    sides: dict[tuple[int, int], list] = {}
+    for c in symbols.chains:
+        sides.setdefault((c.axis, c.outward), []).append(c)
+    for (axis, outward), chains in sorted(sides.items()):
+        for rank, c in enumerate(sorted(chains, key=lambda c: c.tier)):
+            at = c.base + outward * (DIM_FIRST_MM + DIM_STEP_MM * rank) * mm
+
+            def pt(u, v, axis=axis):
+                return (u, v) if axis == 0 else (v, u)
+
+            t = np.asarray(c.ticks)
+            segs.append([pt(t[0] - 1.5 * mm, at), pt(t[-1] + 1.5 * mm, at)])
+            for u in t:
+                segs.append([pt(u, c.base + outward * 2.0 * mm), pt(u, at + outward * 1.5 * mm)])
+                d = 1.1 * mm
+                # a 45-degree slash, the same way on every side
+                ticks.append([pt(u - d, at + d * (1 if axis == 0 else -1)), pt(u + d, at - d * (1 if axis == 0 else -1))])
+            for u0, u1 in zip(t[:-1], t[1:]):
+                text = format_length(float(u1 - u0), params.imperial)
+                mid = 0.5 * (u0 + u1)
+                gap = 0.7 * mm
+                # horizontal chains read from below, vertical ones from the right (rotated 90)
+                if axis == 0:
+                    cands = [((mid, at - gap), 0, "center", "bottom"), ((mid, at + gap), 0, "center", "top")]
+                    cands += [((u1 + 2.5 * mm, at - gap), 0, "left", "bottom"), ((u0 - 2.5 * mm, at - gap), 0, "right", "bottom")]
+                else:
+                    cands = [((at - gap, mid), 90, "center", "bottom"), ((at + gap, mid), 90, "center", "top")]
+                    cands += [((at - gap, u1 + 2.5 * mm), 90, "right", "bottom"), ((at - gap, u0 - 2.5 * mm), 90, "left", "bottom")]
+
+                def make(cand, text=text):
+                    (x, z), rot, ha, va = cand
+                    return _dimension_text(ax, x, z, text, rot, ha, va)
+
+                def spec(cand, text=text):
+                    (x, z), rot, ha, va = cand
+                    return Spot(x, z, text, DIM_TEXT_PT, ha, va, rot)
+
+                out.texts.append((make, cands, spec))
+    ax.add_collection(LineCollection(segs, colors=DIM_COLOR, linewidths=0.3, zorder=2))
+    ax.add_collection(LineCollection(ticks, colors=DIM_COLOR, linewidths=0.7, zorder=2))
+    out.lines = [shapely.LineString(s) for s in segs + ticks]
+    return out
+
+
+def _place_room_dimensions(ax, symbols: PlanSymbols, sheet: Sheet, params: RenderParams, placer: Placer) -> None:
+    """A room's clear width and depth inside it, at the first place across the room where the
+    line crosses no symbol or text and its length fits between its ticks; else left out."""
+    import shapely
+    from matplotlib.collections import LineCollection
+
+    mm = sheet.scale / 1000.0
+    segs, ticks = [], []
+    for d in symbols.room_dimensions:
+        text = format_length(d.hi - d.lo, params.imperial)
+        mid = 0.5 * (d.lo + d.hi)
+        for v in d.across:
+            pt = (lambda u, v=v: (u, v)) if d.axis == 0 else (lambda u, v=v: (v, u))
+            line = shapely.LineString([pt(d.lo + 0.05), pt(d.hi - 0.05)])
+            if not placer.free(line.buffer(0.3 * mm)):
+                continue
+            x, z = (mid, v - 0.6 * mm) if d.axis == 0 else (v - 0.6 * mm, mid)
+            box = placer.spot_box(Spot(x, z, text, DIM_TEXT_PT, "center", "bottom", 90.0 * d.axis))
+            if box.bounds[2 + d.axis] - box.bounds[d.axis] > 0.7 * (d.hi - d.lo) or not placer.free(box):
+                continue
+            _dimension_text(ax, x, z, text, 90.0 * d.axis, "center", "bottom")
+            placer.keep(box)
+            placer.add_line(line)
+            segs.append([pt(d.lo), pt(d.hi)])
+            k = 1.0 * mm
+            for u in (d.lo, d.hi):
+                a, b = (np.array(pt(u)) + s * np.array([k, -k if d.axis == 0 else k]) for s in (-1, 1))
+                ticks.append([tuple(a), tuple(b)])
+            break
+    if segs:
+        ax.add_collection(LineCollection(segs, colors=DIM_COLOR, linewidths=0.3, zorder=2))
+        ax.add_collection(LineCollection(ticks, colors=DIM_COLOR, linewidths=0.7, zorder=2))
 
 
 def _draw_low_confidence(ax, plan: MarkedDrafting) -> None:
@@ -111,32 +419,6 @@ def _draw_low_confidence(ax, plan: MarkedDrafting) -> None:
         ax.add_collection(LineCollection(list(openings), colors=LOW_CONFIDENCE_COLOR, linewidths=1.0, linestyles=LOW_CONFIDENCE_DASH, zorder=4))
     if len(dashed) or rooms or len(openings):
         ax.text(0.01, 0.01, "dashed red: low confidence (check on site)", transform=ax.transAxes, ha="left", fontsize=5.5, color=LOW_CONFIDENCE_COLOR)
-
-
-def _draw_dimensions(ax, symbols: PlanSymbols) -> None:
-    from matplotlib.collections import LineCollection
-
-    lines, ticks = [], []
-    for d in symbols.dimensions:
-        p1, p2 = np.asarray(d.p1), np.asarray(d.p2)
-        u = (p2 - p1) / np.linalg.norm(p2 - p1)
-        left = np.array([-u[1], u[0]])
-        a, b = p1 + left * d.offset, p2 + left * d.offset
-        lines.append([a, b])
-        lines.append([p1 + left * 0.05, a + left * 0.05])  # extension lines
-        lines.append([p2 + left * 0.05, b + left * 0.05])
-        diag = (u + left) * 0.06
-        ticks.extend([[a - diag, a + diag], [b - diag, b + diag]])
-        angle = np.degrees(np.arctan2(u[1], u[0]))
-        # text upright on a page with z down: matplotlib measures rotation on screen
-        rot = -angle
-        if rot > 90 or rot < -90:
-            rot += 180
-        mid = 0.5 * (a + b) + left * 0.07
-        angle = ((rot + 180) % 360) - 180
-        ax.text(mid[0], mid[1], d.text, fontsize=4.5, color=DIM_COLOR, ha="center", va="center", rotation=angle, rotation_mode="anchor", zorder=4)
-    ax.add_collection(LineCollection(lines, colors=DIM_COLOR, linewidths=0.3, zorder=2))
-    ax.add_collection(LineCollection(ticks, colors=DIM_COLOR, linewidths=0.5, zorder=2))
 
 
 def segments_figure(centroids: np.ndarray, walls: FlatWalls, story: int, sheet: Sheet, params: RenderParams, n_stories: int = 1):

@@ -22,8 +22,15 @@ if TYPE_CHECKING:
     from matplotlib.typing import RcKeyType
 
 
-#: Space around the drawing area, in inches: left, right, top, bottom.
-_MARGINS_IN = (0.75, 0.35, 0.6, 0.85)
+#: Space around the drawing area, in inches: left, right, top, bottom (the bottom holds the
+#: strip with the scale bar, north arrow, legend and title block).
+_MARGINS_IN = (0.75, 0.35, 0.6, 1.75)
+#: Height of that strip and narrowest page (inches): the title block and legend need room.
+_STRIP_IN = 1.45
+_MIN_PAGE_W_IN = 10.5
+#: Paper kept around the building for the dimension chains (metres of paper on each side):
+#: three chains at 8, 14 and 20 mm, their text and a little air.
+DIMENSION_MARGIN_PAPER_M = 0.026
 #: Largest drawing (model extent / scale) the automatic scale aims for, in metres of paper.
 _MAX_PAPER_M = 0.30
 #: Largest raster side in pixels; huge buildings get a coarser raster rather than run out of memory.
@@ -100,6 +107,9 @@ def make_sheet(points_xz: np.ndarray, params: RenderParams, margin_m: float = 0.
             f"scale 1:{scale} draws this {longest:.0f} m story on a {longest / scale:.1f} m page (at most {MAX_PAGE_M:g} m)",
             f"pass --scale {fits} or larger, or 0 for the automatic scale",
         )
+    # room outside the building for the dimension chains, in paper millimetres at this scale
+    lo, hi = lo - DIMENSION_MARGIN_PAPER_M * scale, hi + DIMENSION_MARGIN_PAPER_M * scale
+    longest = float(max(hi - lo))
     # huge sheets (a forced small scale) get fewer dots per inch rather than exhaust memory
     dpi = min(params.dpi, max(30, int(_MAX_PIXELS * scale * INCH_M / longest)))
     return Sheet(float(lo[0]), float(hi[0]), float(lo[1]), float(hi[1]), int(scale), dpi)
@@ -113,15 +123,23 @@ def new_figure(sheet: Sheet, title: str, params: RenderParams):
     w_in = sheet.width_m / sheet.scale / INCH_M
     h_in = sheet.depth_m / sheet.scale / INCH_M
     left, right, top, bottom = _MARGINS_IN
-    fw, fh = w_in + left + right, h_in + top + bottom
+    fw, fh = max(w_in + left + right, _MIN_PAGE_W_IN), h_in + top + bottom
     fig = Figure(figsize=(fw, fh), dpi=sheet.dpi)
     ax = fig.add_axes((left / fw, bottom / fh, w_in / fw, h_in / fh))
+    ax.set_zorder(2)  # the plan's lines and texts above a raster placed on the figure
     ax.set_xlim(sheet.xmin, sheet.xmax)
     ax.set_ylim(sheet.zmax, sheet.zmin)  # z down the page
     ax.set_aspect("equal", adjustable="box")
-    unit = FOOT_M if params.imperial else 1.0
-    ax.xaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v / unit:g}"))
-    ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v / unit:g}"))
+    if params.imperial:
+        from matplotlib.ticker import MultipleLocator
+
+        step = FOOT_M * nice_length(max(sheet.width_m, sheet.depth_m) / FOOT_M / 6.0)
+        for axis in (ax.xaxis, ax.yaxis):
+            axis.set_major_locator(MultipleLocator(step))
+            axis.set_major_formatter(FuncFormatter(lambda v, _: format_feet_inches(v)))
+    else:
+        ax.xaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+        ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
     ax.tick_params(labelsize=6, length=2, width=0.4, colors="#555555")
     for s in ax.spines.values():
         s.set_linewidth(0.4)
@@ -132,7 +150,7 @@ def new_figure(sheet: Sheet, title: str, params: RenderParams):
     fig.text(
         left / fw,
         1 - 0.36 / fh,
-        f"Scale 1:{sheet.scale} on a {w_in + left + right:.1f} x {h_in + top + bottom:.1f} in page",
+        f"Scale 1:{sheet.scale} on a {fw:.1f} x {fh:.1f} in page",
         fontsize=6,
         va="top",
         ha="left",
@@ -144,10 +162,11 @@ def new_figure(sheet: Sheet, title: str, params: RenderParams):
 def place_raster(fig, ax, rgba: np.ndarray) -> None:
     """Put a raster made at the sheet's pixel size over the axes, pixel for pixel (no
     resampling: the raster is exactly what the PNG shows)."""
-    left, right, top, bottom = _MARGINS_IN
     dpi = fig.dpi
-    h_px = ax.get_position().height * fig.get_figheight() * dpi
-    fig.figimage(rgba, xo=int(round(left * dpi)), yo=int(round(bottom * dpi + h_px - rgba.shape[0])), origin="upper", zorder=1)
+    pos = ax.get_position()
+    h_px = pos.height * fig.get_figheight() * dpi
+    x0, y0 = pos.x0 * fig.get_figwidth() * dpi, pos.y0 * fig.get_figheight() * dpi
+    fig.figimage(rgba, xo=int(round(x0)), yo=int(round(y0 + h_px - rgba.shape[0])), origin="upper", zorder=1)
 
 
 def nice_length(target: float) -> float:
@@ -161,17 +180,25 @@ def nice_length(target: float) -> float:
     return float(10**exp)
 
 
+def format_feet_inches(m: float) -> str:
+    """A length in feet and inches, as architects write it: ``12'-6"`` (to the nearest inch)."""
+    inches = int(round(abs(m) / INCH_M))
+    sign = "-" if m < 0 and inches else ""
+    return f"{sign}{inches // 12}'-{inches % 12}\""
+
+
 def draw_scale_bar(fig, sheet: Sheet, params: RenderParams) -> None:
-    """A scale bar in metres (or feet) below the drawing, four alternating blocks."""
+    """A scale bar in metres (or feet) in the strip below the drawing, four alternating blocks."""
     from matplotlib.patches import Rectangle
 
     unit, name = (FOOT_M, "ft") if params.imperial else (1.0, "m")
-    total = nice_length(sheet.width_m / unit / 3.0)
-    left, right, top, bottom = _MARGINS_IN
+    # at most 2.8 in of paper: the strip holds the north arrow and the legend beside it
+    total = nice_length(min(sheet.width_m / 3.0, 2.8 * INCH_M * sheet.scale) / unit)
+    left = _MARGINS_IN[0]
     fw = fig.get_figwidth()
     fh = fig.get_figheight()
     w_in = total * unit / sheet.scale / INCH_M
-    ax = fig.add_axes((left / fw, 0.22 / fh, w_in / fw, 0.07 / fh))
+    ax = fig.add_axes((left / fw, 0.55 / fh, w_in / fw, 0.07 / fh))
     ax.set_xlim(0, total)
     ax.set_ylim(0, 1)
     ax.axis("off")
@@ -182,12 +209,150 @@ def draw_scale_bar(fig, sheet: Sheet, params: RenderParams) -> None:
     for v in (0, total / 2, total):
         ax.text(v, 1.6, f"{v:g}", ha="center", va="bottom", fontsize=6)
     ax.text(total * 1.04, 0.5, name, ha="left", va="center", fontsize=6)
+    ax.text(0, -1.2, f"SCALE 1:{sheet.scale}", ha="left", va="top", fontsize=6.5, weight="bold")
 
 
-def draw_annotations(ax, labels, kinds, positions, directions, probe_m: float = ANNOTATION_PROBE_M) -> None:
-    """Annotated objects as red markers with their labels and probe directions."""
-    if not len(labels):
+def draw_north_arrow(fig, north_deg: float = 0.0) -> None:
+    """A north arrow in the strip below the drawing. ``north_deg`` is the compass bearing of
+    up the page (plan -z): north is that many degrees counter-clockwise from up."""
+    from matplotlib.patches import Circle, Polygon
+
+    fw, fh = fig.get_figwidth(), fig.get_figheight()
+    size = 0.62  # inches
+    x0 = _MARGINS_IN[0] + 3.05
+    ax = fig.add_axes((x0 / fw, 0.32 / fh, size / fw, size / fh))
+    ax.set_xlim(-1, 1)
+    ax.set_ylim(-1, 1)
+    ax.set_aspect("equal")
+    ax.axis("off")
+    t = np.radians(north_deg)
+    rot = np.array([[np.cos(t), -np.sin(t)], [np.sin(t), np.cos(t)]])  # counter-clockwise on the page
+    ax.add_patch(Circle((0, 0), 0.62, fill=False, lw=0.6, color="black"))
+    tip, left, right, tail = (rot @ np.array(v) for v in ((0, 0.78), (-0.25, -0.45), (0.25, -0.45), (0, -0.2)))
+    ax.add_patch(Polygon([tip, left, tail], closed=True, facecolor="black", edgecolor="black", lw=0.5))
+    ax.add_patch(Polygon([tip, right, tail], closed=True, facecolor="white", edgecolor="black", lw=0.5))
+    n = rot @ np.array([0, 0.98])
+    ax.text(n[0], n[1], "N", ha="center", va="center", fontsize=7.5, weight="bold")
+
+
+def sheet_date() -> str:
+    """The date written in title blocks: ``SOURCE_DATE_EPOCH`` (the reproducible-builds
+    convention) when set, else today."""
+    import datetime
+    import os
+
+    epoch = os.environ.get("SOURCE_DATE_EPOCH", "")
+    if epoch.strip().isdigit():
+        return datetime.datetime.fromtimestamp(int(epoch), tz=datetime.UTC).date().isoformat()
+    return datetime.date.today().isoformat()
+
+
+def draw_title_block(fig, sheet: Sheet, params: RenderParams, drawing: str, story: str, scan: str = "") -> None:
+    """The title block at the bottom right: scan, drawing, story, scale, units, date and the
+    meshplan version, as rows of a ruled box."""
+    from matplotlib.patches import Rectangle
+
+    from .._version import __version__
+
+    fw, fh = fig.get_figwidth(), fig.get_figheight()
+    w, h = 3.1, 1.2
+    x0 = fw - _MARGINS_IN[1] - w
+    ax = fig.add_axes((x0 / fw, 0.18 / fh, w / fw, h / fh))
+    ax.set_xlim(0, w)
+    ax.set_ylim(0, h)
+    ax.axis("off")
+    ax.add_patch(Rectangle((0, 0), w, h, fill=False, lw=1.0, color="black"))
+    units = "feet and inches, ft²" if params.imperial else "metres, m²"
+    rows = [
+        ("SCAN", plain_text(scan) or "-"),
+        ("DRAWING", drawing),
+        ("STORY", story),
+        ("SCALE", f"1:{sheet.scale}"),
+        ("UNITS", units),
+        ("DATE", sheet_date()),
+        ("BY", f"meshplan {__version__}"),
+    ]
+    step = h / len(rows)
+    for k, (key, value) in enumerate(rows):
+        y = h - (k + 0.5) * step
+        if k:
+            ax.plot([0, w], [h - k * step] * 2, lw=0.3, color="#777777")
+        ax.text(0.06, y, key, fontsize=5, color="#555555", va="center", ha="left")
+        ax.text(0.72, y, value[:60], fontsize=6.3 if k else 6.8, va="center", ha="left", weight="bold" if k < 2 else "normal", **PLAIN_TEXT_KW)
+    ax.plot([0.66, 0.66], [0, h], lw=0.3, color="#777777")
+
+
+def draw_legend(fig, handles: list, labels: list[str]) -> None:
+    """The legend in the strip, between the north arrow and the title block."""
+    if not handles:
         return
+    fw, fh = fig.get_figwidth(), fig.get_figheight()
+    x0 = _MARGINS_IN[0] + 3.8
+    x1 = fw - _MARGINS_IN[1] - 3.25
+    ncol = max(1, min(3, int((x1 - x0) / 1.05), (len(handles) + 4) // 5))
+    fig.legend(
+        handles,
+        labels,
+        loc="lower left",
+        bbox_to_anchor=(x0 / fw, 0.16 / fh),
+        fontsize=5.5,
+        ncol=ncol,
+        frameon=False,
+        handlelength=2.2,
+        handleheight=1.1,
+        borderaxespad=0.0,
+        columnspacing=1.0,
+        title="LEGEND",
+        title_fontsize=6,
+        alignment="left",
+    )
+
+
+#: Where an annotation's label goes around its marker (offset in points, alignment), in order.
+_LABEL_SPOTS = (
+    ((3, 3), "left", "bottom"),
+    ((3, -3), "left", "top"),
+    ((-3, 3), "right", "bottom"),
+    ((-3, -3), "right", "top"),
+    ((5, 0), "left", "center"),
+    ((-5, 0), "right", "center"),
+    ((0, 5), "center", "bottom"),
+    ((0, -5), "center", "top"),
+    ((9, 9), "left", "bottom"),
+    ((-9, -9), "right", "top"),
+)
+#: Annotations are drawn above everything in the plan.
+ANNOTATION_ZORDER = 20
+
+
+def annotation_obstacles(positions, directions, probe_m: float = ANNOTATION_PROBE_M, marker_m: float = 0.06) -> list:
+    """The annotation markers (a small box each) and probe arrows, as shapely geometries in
+    the plan, for texts to keep clear of."""
+    import shapely
+
+    out = []
+    pos = np.asarray(positions).reshape(-1, 3)
+    dirs = np.asarray(directions).reshape(-1, 3)
+    for i in range(len(pos)):
+        x, z = pos[i, 0], pos[i, 2]
+        out.append(shapely.box(x - marker_m, z - marker_m, x + marker_m, z + marker_m))
+        d = dirs[i]
+        if np.all(np.isfinite(d)) and np.hypot(d[0], d[2]) > 1e-6:
+            n = np.hypot(d[0], d[2])
+            out.append(shapely.LineString([(x, z), (x + probe_m * d[0] / n, z + probe_m * d[2] / n)]))
+    return out
+
+
+def draw_annotations(ax, labels, kinds, positions, directions, probe_m: float = ANNOTATION_PROBE_M, placer=None, legend: bool = True) -> list:
+    """Annotated objects as red markers with their labels (on a white halo) and probe
+    directions, above everything; with a :class:`meshplan.render.placement.Placer` each label
+    goes where it covers no other text or line. Returns the legend handles (one per kind)."""
+    from matplotlib.transforms import ScaledTranslation
+
+    from .placement import tag, with_halo
+
+    if not len(labels):
+        return []
     pos = np.asarray(positions)
     dirs = np.asarray(directions)
     seen = set()
@@ -203,7 +368,7 @@ def draw_annotations(ax, labels, kinds, positions, directions, probe_m: float = 
             markeredgecolor="white",
             linestyle="none",
             label=kind if kind not in seen else None,
-            zorder=5,
+            zorder=ANNOTATION_ZORDER,
         )
         seen.add(kind)
         d = dirs[i]
@@ -215,11 +380,35 @@ def draw_annotations(ax, labels, kinds, positions, directions, probe_m: float = 
                 xy=(x + probe_m * dx / n, z + probe_m * dz / n),
                 xytext=(x, z),
                 arrowprops=dict(arrowstyle="-|>", color=ANNOTATION_COLOR, lw=0.8, mutation_scale=5),
-                zorder=5,
+                zorder=ANNOTATION_ZORDER,
             )
         # the user's text, drawn as it is: no mathtext ("$x^2$"), no control characters
-        ax.annotate(plain_text(label), (x, z), xytext=(3, 3), textcoords="offset points", fontsize=5.5, color=ANNOTATION_COLOR, zorder=6, **PLAIN_TEXT_KW)
-    ax.legend(loc="lower right", fontsize=5, frameon=True, framealpha=0.8, markerscale=0.8, borderpad=0.3, handletextpad=0.3)
+        text = plain_text(label)
+
+        def make(spot, text=text, x=x, z=z):
+            (dx, dz), ha, va = spot
+            # a text shifted by points of paper (cheaper to measure than an annotation)
+            at = ax.transData + ScaledTranslation(dx / 72.0, dz / 72.0, ax.figure.dpi_scale_trans)
+            t = ax.text(
+                x, z, text, transform=at, ha=ha, va=va, fontsize=5.5, color=ANNOTATION_COLOR,
+                zorder=ANNOTATION_ZORDER + 1, **PLAIN_TEXT_KW,
+            )
+            return tag(with_halo(t, 1.8), "annotation-label")
+
+        def spec(spot, text=text, x=x, z=z):
+            from .placement import Spot
+
+            (dx, dz), ha, va = spot
+            return Spot(x, z, text, 5.5, ha, va, 0.0, dx, dz)
+
+        if placer is None or placer.place(make, _LABEL_SPOTS, spec=spec) is None:
+            t = make(_LABEL_SPOTS[0])
+            if placer is not None:
+                placer.keep(placer.box(t))
+    handles, names = ax.get_legend_handles_labels()
+    if legend:
+        ax.legend(loc="lower right", fontsize=5, frameon=True, framealpha=0.8, markerscale=0.8, borderpad=0.3, handletextpad=0.3)
+    return list(zip(handles, names))
 
 
 def rasterize_segments(segments: np.ndarray, level: np.ndarray, sheet: Sheet) -> np.ndarray:
