@@ -164,3 +164,286 @@ def dbscan_labels(p, core, start, neigh, roots):  # pragma: no cover - compiled
                         best = d
                         labels[i] = roots[nc]
     return labels
+
+
+@njit(cache=True, nogil=True)
+def scatter_max(out, idx, values):  # pragma: no cover - compiled
+    """``np.maximum.at(out, idx, values)`` (NaN values propagate, as there), in one pass."""
+    for j in range(idx.shape[0]):
+        i = idx[j]
+        v = values[j]
+        if v > out[i] or v != v:
+            out[i] = v
+
+
+@njit(cache=True, nogil=True)
+def scatter_min(out, idx, values):  # pragma: no cover - compiled
+    """``np.minimum.at(out, idx, values)`` (NaN values propagate, as there), in one pass."""
+    for j in range(idx.shape[0]):
+        i = idx[j]
+        v = values[j]
+        if v < out[i] or v != v:
+            out[i] = v
+
+
+@njit(cache=True, nogil=True)
+def longest_edges(tri):  # pragma: no cover - compiled
+    """``(F,)`` longest edge of each face ``tri`` (F, 3, 3): the numbers of
+    ``np.linalg.norm(tri - np.roll(tri, 1, axis=1), axis=2).max(axis=1)``."""
+    n = tri.shape[0]
+    out = np.empty(n, np.float64)
+    for f in range(n):
+        best = 0.0
+        for a in range(3):
+            b = (a + 2) % 3
+            e0 = tri[f, a, 0] - tri[f, b, 0]
+            e1 = tri[f, a, 1] - tri[f, b, 1]
+            e2 = tri[f, a, 2] - tri[f, b, 2]
+            d = np.sqrt(e0 * e0 + e1 * e1 + e2 * e2)
+            if a == 0 or d > best or d != d:
+                best = d
+        out[f] = best
+    return out
+
+
+@njit(cache=True, nogil=True)
+def centroids_areas(tri):  # pragma: no cover - compiled
+    """``(F, 3)`` centroids (``(t0 + t1 + t2) / 3``) and ``(F,)`` areas (``|(t1 - t0) x (t2 -
+    t0)| / 2``) of the faces ``tri`` (F, 3, 3), with numpy's operations in numpy's order."""
+    n = tri.shape[0]
+    c = np.empty((n, 3), np.float64)
+    area = np.empty(n, np.float64)
+    for f in range(n):
+        for k in range(3):
+            c[f, k] = (tri[f, 0, k] + tri[f, 1, k] + tri[f, 2, k]) / 3.0
+        a0 = tri[f, 1, 0] - tri[f, 0, 0]
+        a1 = tri[f, 1, 1] - tri[f, 0, 1]
+        a2 = tri[f, 1, 2] - tri[f, 0, 2]
+        b0 = tri[f, 2, 0] - tri[f, 0, 0]
+        b1 = tri[f, 2, 1] - tri[f, 0, 1]
+        b2 = tri[f, 2, 2] - tri[f, 0, 2]
+        x = a1 * b2 - a2 * b1
+        y = a2 * b0 - a0 * b2
+        z = a0 * b1 - a1 * b0
+        area[f] = 0.5 * np.sqrt(x * x + y * y + z * z)
+    return c, area
+
+
+@njit(cache=True, nogil=True)
+def stable_group_order(labels, k):  # pragma: no cover - compiled
+    """Indices that sort ``labels`` (ints in ``0 .. k-1``) stably: a counting sort, the order of
+    ``np.argsort(labels, kind="stable")``."""
+    counts = np.zeros(k + 1, np.int64)
+    for j in range(labels.shape[0]):
+        counts[labels[j] + 1] += 1
+    for i in range(k):
+        counts[i + 1] += counts[i]
+    out = np.empty(labels.shape[0], np.int64)
+    for j in range(labels.shape[0]):
+        g = labels[j]
+        out[counts[g]] = j
+        counts[g] += 1
+    return out
+
+
+@njit(cache=True, nogil=True)
+def _edge3(t):  # pragma: no cover - compiled
+    """Longest edge of one face ``t`` (3, 3), as :func:`longest_edges`."""
+    best = 0.0
+    for a in range(3):
+        b = (a + 2) % 3
+        e0 = t[a, 0] - t[b, 0]
+        e1 = t[a, 1] - t[b, 1]
+        e2 = t[a, 2] - t[b, 2]
+        d = np.sqrt(e0 * e0 + e1 * e1 + e2 * e2)
+        if a == 0 or d > best or d != d:
+            best = d
+    return best
+
+
+@njit(cache=True, nogil=True)
+def _split_pieces(t, longest, stack, pieces):  # pragma: no cover - compiled
+    """The pieces of face ``t`` split into four at its edge midpoints until no edge exceeds
+    ``longest`` (corners in the order of ``meshplan.plan.doors._subdivide``), written to
+    ``pieces`` (grown as needed); returns them, their number and the (grown) stack."""
+    top = 0
+    stack[0] = t
+    n = 0
+    while top >= 0:
+        cur = stack[top].copy()
+        top -= 1
+        if not (_edge3(cur) > longest):
+            if n == pieces.shape[0]:
+                grown = np.empty((2 * n, 3, 3), np.float64)
+                grown[:n] = pieces
+                pieces = grown
+            pieces[n] = cur
+            n += 1
+            continue
+        if top + 4 >= stack.shape[0]:
+            grown = np.empty((2 * stack.shape[0] + 8, 3, 3), np.float64)
+            grown[: top + 1] = stack[: top + 1]
+            stack = grown
+        a, b, c = cur[0], cur[1], cur[2]
+        ab, bc, ca = 0.5 * (a + b), 0.5 * (b + c), 0.5 * (c + a)
+        for corners in ((a, ab, ca), (ab, b, bc), (ca, bc, c), (ab, bc, ca)):
+            top += 1
+            for k in range(3):
+                stack[top, k] = corners[k]
+    return pieces, n, stack
+
+
+@njit(cache=True, nogil=True)
+def _levels(e, spacing):  # pragma: no cover - compiled
+    return int(min(max(np.ceil(e / spacing), 1.0), 64.0))
+
+
+@njit(cache=True, nogil=True)
+def _grid_points(p, k, out, j):  # pragma: no cover - compiled
+    """The barycentric grid of ``k`` steps on face ``p`` written to ``out`` from row ``j``."""
+    for i in range(k + 1):
+        for jj in range(k + 1 - i):
+            a = i / k
+            b = jj / k
+            w0 = 1 - a - b
+            for d in range(3):
+                out[j, d] = w0 * p[0, d] + a * p[1, d] + b * p[2, d]
+            j += 1
+    return j
+
+
+@njit(cache=True, nogil=True)
+def sample_faces(tri, longest, spacing):  # pragma: no cover - compiled
+    """The sample points of ``meshplan.plan.rooms.sample_triangles(_subdivide(tri, longest),
+    spacing)``, the same numbers (in another order).
+
+    Each face is split into four until no edge exceeds ``longest``; each piece gets the
+    barycentric grid of ``k = clip(ceil(edge / spacing), 1, 64)`` steps per edge, every point
+    ``(1 - a - b) t0 + a t1 + b t2`` as numpy's ``einsum`` computes it.
+    """
+    n = tri.shape[0]
+    stack = np.empty((64, 3, 3), np.float64)
+    pieces = np.empty((16, 3, 3), np.float64)
+    edge = np.empty(n, np.float64)
+    total = 0
+    for f in range(n):  # first pass: how many points
+        e = _edge3(tri[f])
+        edge[f] = e
+        if not (e > longest):
+            k = _levels(e, spacing)
+            total += (k + 1) * (k + 2) // 2
+            continue
+        pieces, m, stack = _split_pieces(tri[f], longest, stack, pieces)
+        for q in range(m):
+            k = _levels(_edge3(pieces[q]), spacing)
+            total += (k + 1) * (k + 2) // 2
+    out = np.empty((total, 3), np.float64)
+    j = 0
+    for f in range(n):
+        if not (edge[f] > longest):
+            j = _grid_points(tri[f], _levels(edge[f], spacing), out, j)
+            continue
+        pieces, m, stack = _split_pieces(tri[f], longest, stack, pieces)
+        for q in range(m):
+            j = _grid_points(pieces[q], _levels(_edge3(pieces[q]), spacing), out, j)
+    return out
+
+
+@njit(cache=True, nogil=True)
+def face_reach(tri, centroids):  # pragma: no cover - compiled
+    """``(F,)`` largest distance of a corner from the centroid: the numbers of
+    ``np.max(np.linalg.norm(tri - centroids[:, None, :], axis=2), axis=1)``."""
+    n = tri.shape[0]
+    out = np.empty(n, np.float64)
+    for f in range(n):
+        best = 0.0
+        for a in range(3):
+            e0 = tri[f, a, 0] - centroids[f, 0]
+            e1 = tri[f, a, 1] - centroids[f, 1]
+            e2 = tri[f, a, 2] - centroids[f, 2]
+            d = np.sqrt(e0 * e0 + e1 * e1 + e2 * e2)
+            if a == 0 or d > best or d != d:
+                best = d
+        out[f] = best
+    return out
+
+
+@njit(cache=True, nogil=True)
+def _root(parent, x):  # pragma: no cover - compiled
+    while parent[x] != x:
+        parent[x] = parent[parent[x]]
+        x = parent[x]
+    return x
+
+
+@njit(cache=True, nogil=True)
+def face_components(faces, n_vertices):  # pragma: no cover - compiled
+    """``(F,)`` connected piece of every face (faces sharing a vertex are connected), labelled
+    by the lowest vertex of the piece: union-find with the lower root kept."""
+    parent = np.arange(n_vertices)
+    for f in range(faces.shape[0]):
+        for e in range(2):
+            a = _root(parent, faces[f, e])
+            b = _root(parent, faces[f, e + 1])
+            if a < b:
+                parent[b] = a
+            elif b < a:
+                parent[a] = b
+    out = np.empty(faces.shape[0], np.int64)
+    for f in range(faces.shape[0]):
+        out[f] = _root(parent, faces[f, 0])
+    return out
+
+
+@njit(cache=True, nogil=True)
+def plan_rasters(tri, centroid, level, on_floor, ceiling, capped, cell):  # pragma: no cover - compiled
+    """The rasters of ``meshplan.walls.evidence.story_raster`` in three passes over the faces:
+    each face marks the cells (``cell`` m, from the lowest x and z of every corner and centroid)
+    of its three corners and its centroid. Returns ``x0, z0``, the highest point of each cell
+    (capped at ``ceiling`` when ``capped``; ``-inf`` where none), the highest ``level`` centroid
+    (``-inf`` where none) and the cells of ``on_floor`` faces (1.0)."""
+    n = tri.shape[0]
+    x0 = np.inf
+    z0 = np.inf
+    for f in range(n):
+        for a in range(4):
+            x = tri[f, a, 0] if a < 3 else centroid[f, 0]
+            z = tri[f, a, 2] if a < 3 else centroid[f, 2]
+            if x < x0:
+                x0 = x
+            if z < z0:
+                z0 = z
+    ni = 0
+    nk = 0
+    for f in range(n):
+        for a in range(4):
+            x = tri[f, a, 0] if a < 3 else centroid[f, 0]
+            z = tri[f, a, 2] if a < 3 else centroid[f, 2]
+            i = int(np.floor((x - x0) / cell))
+            k = int(np.floor((z - z0) / cell))
+            if i > ni:
+                ni = i
+            if k > nk:
+                nk = k
+    ni += 1
+    nk += 1
+    top = np.full(ni * nk, -np.inf)
+    shelf = np.full(ni * nk, -np.inf)
+    floor_cells = np.zeros(ni * nk)
+    for f in range(n):
+        for a in range(4):
+            x = tri[f, a, 0] if a < 3 else centroid[f, 0]
+            y = tri[f, a, 1] if a < 3 else centroid[f, 1]
+            z = tri[f, a, 2] if a < 3 else centroid[f, 2]
+            c = int(np.floor((x - x0) / cell)) * nk + int(np.floor((z - z0) / cell))
+            if capped and not (y <= ceiling):
+                y = ceiling if y == y else y
+            if y > top[c] or y != y:
+                top[c] = y
+            if level[f]:
+                v = centroid[f, 1]
+                if v > shelf[c] or v != v:
+                    shelf[c] = v
+            if on_floor[f]:
+                floor_cells[c] = 1.0
+    return x0, z0, top.reshape(ni, nk), shelf.reshape(ni, nk), floor_cells.reshape(ni, nk)

@@ -33,15 +33,13 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy import ndimage
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
 
+from .._kernels import face_components, face_reach, sample_faces, scatter_max, scatter_min
 from ..geometry import FloatArray, IntArray, Mesh
 from ..walls import FlatWalls
 from .params import PlanParams
-from .rooms import sample_triangles
 
-#: Edges longer than this (m) are halved before sampling: :func:`sample_triangles` puts at most 64
+#: Edges longer than this (m) are halved before sampling: :func:`~meshplan.plan.rooms.sample_triangles` puts at most 64
 #: samples along an edge, too few on a parametric wall's 5-10 m triangles for a 5 cm grid.
 MAX_SAMPLED_EDGE_M = 1.5
 
@@ -108,20 +106,22 @@ class WallEvidence:
         self.floorish = np.flatnonzero(np.abs(self.normals[:, 1]) >= FLOOR_NORMAL_COS)
         # each face's reach from its centroid, so that a cheap test on centroids finds the
         # faces that may cross a wall's slab before their corners are projected
-        self.radius = np.max(np.linalg.norm(self.tri - self.centroids[:, None, :], axis=2), axis=1) if len(self.tri) else np.zeros(0)
+        self.radius = face_reach(np.ascontiguousarray(self.tri), np.ascontiguousarray(self.centroids)) if len(self.tri) else np.zeros(0)
         self._cache: dict[tuple, tuple[FloatArray, IntArray, IntArray]] = {}
         self._panels: tuple[IntArray, IntArray] | None = None
+        self._vertical_normals: FloatArray | None = None
 
     def _sorted(self, key: tuple, w: int, faces: IntArray) -> tuple[FloatArray, IntArray, IntArray]:
-        """``faces`` with a small reach sorted by their centroids' position along face ``w``'s
-        direction normal, and those with a large reach (parametric triangles), cached by ``key``."""
+        """``faces`` with a small reach and their centroids' position along face ``w``'s
+        direction normal, and those with a large reach (parametric triangles), cached by ``key``.
+        (Not sorted: a pass over the positions per face searched costs less than the sort, and
+        every use of the faces found is independent of their order.)"""
         if key not in self._cache:
             n3 = self._direction_normal(w)
             big = self.radius[faces] > BIG_FACE_M
             small = faces[~big]
             pos = self.centroids[small] @ n3
-            order = np.argsort(pos, kind="stable")
-            self._cache[key] = (pos[order], small[order], faces[big])
+            self._cache[key] = (pos, small, faces[big])
         return self._cache[key]
 
     def _direction_normal(self, w: int) -> FloatArray:
@@ -136,8 +136,8 @@ class WallEvidence:
         sign = 1.0 if float(n_dir @ n3) > 0 else -1.0
         off = float(self.walls.offset[w])
         a, b = sorted((sign * (d_range[0] + off), sign * (d_range[1] + off)))
-        i, j = np.searchsorted(pos, [a - BIG_FACE_M, b + BIG_FACE_M])
-        return np.concatenate([small[i:j], big])
+        lo, hi = a - BIG_FACE_M, b + BIG_FACE_M
+        return np.concatenate([small[(pos >= lo) & (pos < hi)], big])
 
     def facing(self, w: int, d_range: tuple[float, float]) -> IntArray:
         """The vertical faces facing along face ``w``'s normal that may reach ``d_range``."""
@@ -145,7 +145,9 @@ class WallEvidence:
         if key not in self._cache:
             n3 = self._direction_normal(w)
             v = self.vertical
-            self._sorted(key, w, v[np.abs(self.normals[v] @ n3) >= self.cos])
+            if self._vertical_normals is None:
+                self._vertical_normals = self.normals[v]
+            self._sorted(key, w, v[np.abs(self._vertical_normals @ n3) >= self.cos])
         return self.slab_faces(np.zeros(0, np.int64), key, w, d_range)
 
     def floor_faces(self, w: int, floor: float, d_range: tuple[float, float]) -> IntArray:
@@ -177,19 +179,16 @@ class WallEvidence:
             if not len(f):
                 self._panels = empty
                 return empty
-            n_v = self.mesh.n_vertices
-            rows = np.r_[f[:, 0], f[:, 1]]
-            cols = np.r_[f[:, 1], f[:, 2]]
-            g = coo_matrix((np.ones(len(rows), np.int8), (rows, cols)), shape=(n_v, n_v))
-            _, vlab = connected_components(g, directed=False)
-            flab = vlab[f[:, 0]]
+            # the connected pieces, each labelled by its lowest vertex (labels in the order of
+            # scipy's connected_components over the vertices, which is all that is used)
+            flab = face_components(np.ascontiguousarray(f, dtype=np.int64), self.mesh.n_vertices)
             k = int(flab.max()) + 1
             counts = np.bincount(flab, minlength=k)
             y = self.tri[:, :, 1]
             ymin = np.full(k, np.inf)
             ymax = np.full(k, -np.inf)
-            np.minimum.at(ymin, flab, y.min(axis=1))
-            np.maximum.at(ymax, flab, y.max(axis=1))
+            scatter_min(ymin, flab, _min3(y))
+            scatter_max(ymax, flab, _max3(y))
             tall = (counts <= PANEL_MAX_FACES) & (ymax - ymin >= self.params.door_height_m - EDGE_CELLS * self.params.opening_cell_m)
             sel = np.flatnonzero(tall[flab])
             if not len(sel):
@@ -203,7 +202,10 @@ class WallEvidence:
 
 
 def _subdivide(tri: FloatArray, longest: float) -> FloatArray:
-    """Split triangles into four at their edge midpoints until no edge exceeds ``longest``."""
+    """Split triangles into four at their edge midpoints until no edge exceeds ``longest``.
+
+    The reference of the compiled :func:`meshplan._kernels.sample_faces` (which :func:`_samples`
+    uses): the same pieces, corner order and all."""
     out = []
     while len(tri):
         edge = np.max(np.linalg.norm(tri - np.roll(tri, 1, axis=1), axis=2), axis=1)
@@ -216,6 +218,26 @@ def _subdivide(tri: FloatArray, longest: float) -> FloatArray:
         ab, bc, ca = 0.5 * (a + b), 0.5 * (b + c), 0.5 * (c + a)
         tri = np.concatenate([np.stack(s, axis=1) for s in ((a, ab, ca), (ab, b, bc), (ca, bc, c), (ab, bc, ca))])
     return np.concatenate(out) if out else np.zeros((0, 3, 3))
+
+
+def _samples(tri: FloatArray, cell: float) -> FloatArray:
+    """Points covering the faces ``tri`` on a grid finer than ``cell``: the points of
+    ``sample_triangles(_subdivide(tri, MAX_SAMPLED_EDGE_M), 0.7 * cell)``, the same numbers, in
+    one compiled pass (no copies of the pieces)."""
+    if not len(tri):
+        return np.zeros((0, 3))
+    return sample_faces(np.ascontiguousarray(tri, dtype=np.float64), MAX_SAMPLED_EDGE_M, 0.7 * cell)
+
+
+def _max3(a: FloatArray) -> FloatArray:
+    """``a.max(axis=1)`` of an ``(n, 3)`` array, the same numbers (numpy's reduction over a
+    short last axis is several times slower)."""
+    return np.maximum(np.maximum(a[:, 0], a[:, 1]), a[:, 2])
+
+
+def _min3(a: FloatArray) -> FloatArray:
+    """``a.min(axis=1)`` of an ``(n, 3)`` array, the same numbers."""
+    return np.minimum(np.minimum(a[:, 0], a[:, 1]), a[:, 2])
 
 
 def _straight(box: np.ndarray, tolerance: int, share: float) -> bool:
@@ -234,7 +256,8 @@ def _straight(box: np.ndarray, tolerance: int, share: float) -> bool:
 def _corner_limits(walls: FlatWalls, w: int, lo: float, hi: float, corner: float) -> tuple[float | None, float | None]:
     """Where perpendicular walls of the same story cross face ``w``'s line just beyond its ends
     (within ``corner`` of the searched range ``[lo, hi]``'s face ends): the corners that end it."""
-    n, t, off = walls.normal[w], walls.tangent[w], walls.offset[w]
+    tangent = walls.tangent  # built once here, not once per wall
+    n, t, off = walls.normal[w], tangent[w], walls.offset[w]
     left = right = None
     for p in range(len(walls)):
         if p == w or walls.story[p] != walls.story[w]:
@@ -244,7 +267,7 @@ def _corner_limits(walls: FlatWalls, w: int, lo: float, hi: float, corner: float
             continue
         u = (walls.offset[p] - off * float(walls.normal[p] @ n)) / c
         point = off * n + u * t
-        up = float(walls.tangent[p] @ point)
+        up = float(tangent[p] @ point)
         if not (walls.u_min[p] - corner <= up <= walls.u_max[p] + corner):
             continue  # the perpendicular wall does not reach this wall's line
         if lo - corner <= u <= walls.u_min[w] + corner and (left is None or u > left):
@@ -281,20 +304,19 @@ def _gaps(ev: WallEvidence, w: int, floor: float, ceiling: float) -> list[Candid
     u = tv @ t3
     y = tv[:, :, 1]
     keep = (
-        (d.max(axis=1) >= far) & (d.min(axis=1) <= near)
-        & (u.max(axis=1) >= lo) & (u.min(axis=1) <= hi)
-        & (y.max(axis=1) >= floor) & (y.min(axis=1) <= ceiling)
+        (_max3(d) >= far) & (_min3(d) <= near)
+        & (_max3(u) >= lo) & (_min3(u) <= hi)
+        & (_max3(y) >= floor) & (_min3(y) <= ceiling)
     )
     tri = tv[keep]
     if not len(tri):
         return []
-    pts = sample_triangles(_subdivide(tri, MAX_SAMPLED_EDGE_M), 0.7 * cell)
+    pts = _samples(tri, cell)
     pd = pts @ n3 - off
-    pts = pts[(pd >= far) & (pd <= near)]
     pu, py = pts @ t3, pts[:, 1]
     ncol = max(1, int(np.ceil((hi - lo) / cell)))
     nrow = max(1, int(np.ceil((ceiling - floor) / cell)))
-    inside = (pu >= lo) & (pu < hi) & (py >= floor) & (py < ceiling)
+    inside = (pd >= far) & (pd <= near) & (pu >= lo) & (pu < hi) & (py >= floor) & (py < ceiling)
     c = np.clip(np.floor((pu[inside] - lo) / cell).astype(np.int64), 0, ncol - 1)
     r = np.clip(np.floor((py[inside] - floor) / cell).astype(np.int64), 0, nrow - 1)
     grid = np.zeros((nrow, ncol), dtype=bool)
@@ -480,12 +502,12 @@ def _floor_beyond(
         return out
     tri = ev.tri[f]
     d = tri @ n3 - off
-    f_ok = (np.abs(ev.centroids[f, 1] - floor) <= FLOOR_BAND_M) & (d.max(axis=1) >= -FLOOR_BEYOND_M) & (d.min(axis=1) <= -params.opening_slab_m)
+    f_ok = (np.abs(ev.centroids[f, 1] - floor) <= FLOOR_BAND_M) & (_max3(d) >= -FLOOR_BEYOND_M) & (_min3(d) <= -params.opening_slab_m)
     if not np.any(f_ok):
         return out
     u = tri[f_ok] @ t3
-    a = np.clip(np.floor((u.min(axis=1) - lo) / cell).astype(np.int64), 0, ncol)
-    b = np.clip(np.ceil((u.max(axis=1) - lo) / cell).astype(np.int64), 0, ncol)
+    a = np.clip(np.floor((_min3(u) - lo) / cell).astype(np.int64), 0, ncol)
+    b = np.clip(np.ceil((_max3(u) - lo) / cell).astype(np.int64), 0, ncol)
     # columns covered by a floor triangle: a difference array over the triangles' spans
     diff = np.zeros(ncol + 1, np.int64)
     np.add.at(diff, a, 1)
@@ -511,9 +533,9 @@ def _panels(ev: WallEvidence, w: int, floor: float, ceiling: float) -> list[Cand
     u = (tri @ t3).reshape(len(faces), 3)
     y = tri[:, :, 1]
     seg = starts[:-1]
-    dmin, dmax = np.minimum.reduceat(d.min(1), seg), np.maximum.reduceat(d.max(1), seg)
-    umin, umax = np.minimum.reduceat(u.min(1), seg), np.maximum.reduceat(u.max(1), seg)
-    ymin, ymax = np.minimum.reduceat(y.min(1), seg), np.maximum.reduceat(y.max(1), seg)
+    dmin, dmax = np.minimum.reduceat(_min3(d), seg), np.maximum.reduceat(_max3(d), seg)
+    umin, umax = np.minimum.reduceat(_min3(u), seg), np.maximum.reduceat(_max3(u), seg)
+    ymin, ymax = np.minimum.reduceat(_min3(y), seg), np.maximum.reduceat(_max3(y), seg)
     width = umax - umin
     ok = np.flatnonzero(
         (dmin >= far) & (dmax <= near)
@@ -528,7 +550,7 @@ def _panels(ev: WallEvidence, w: int, floor: float, ceiling: float) -> list[Cand
         along = np.abs(ev.normals[fi] @ n3) >= ev.cos
         if not np.any(along):
             continue
-        pts = sample_triangles(_subdivide(ev.tri[fi[along]], MAX_SAMPLED_EDGE_M), 0.7 * cell)
+        pts = _samples(ev.tri[fi[along]], cell)
         nc = max(1, int(np.ceil(width[i] / cell)))
         nr = max(1, int(np.ceil((ymax[i] - ymin[i]) / cell)))
         cc = np.clip(np.floor((pts @ t3 - umin[i]) / cell).astype(np.int64), 0, nc - 1)

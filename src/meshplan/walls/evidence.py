@@ -31,6 +31,7 @@ from typing import Literal
 
 import numpy as np
 
+from .._kernels import centroids_areas, longest_edges, plan_rasters, scatter_max, scatter_min, stable_group_order
 from ..geometry import FloatArray, IntArray
 
 #: Cell of the plan rasters of a story (m): finer than a counter's depth (0.6 m) and a wall's
@@ -98,8 +99,10 @@ def subdivide(triangles: FloatArray, max_edge_m: float) -> tuple[FloatArray, Int
         ``(P, 3, 3)`` corners of the pieces (faces that needed no split are kept first, in
         order) and ``(P,)`` the face each piece comes from.
     """
-    edges = np.linalg.norm(triangles - np.roll(triangles, 1, axis=1), axis=2).max(axis=1)
+    edges = longest_edge(triangles)
     n_split = np.clip(np.ceil(edges / max_edge_m), 1, MAX_SPLIT).astype(np.int64)
+    if not np.any(n_split > 1):  # dense scans: nothing to split (no copy of the mesh)
+        return triangles, np.arange(len(triangles), dtype=np.int64)
     keep = np.flatnonzero(n_split == 1)
     pieces = [triangles[keep]]
     parents = [keep]
@@ -110,6 +113,12 @@ def subdivide(triangles: FloatArray, max_edge_m: float) -> tuple[FloatArray, Int
         pieces.append(sub)
         parents.append(np.repeat(idx, len(bary)))
     return np.concatenate(pieces), np.concatenate(parents).astype(np.int64)
+
+
+def longest_edge(triangles: FloatArray) -> FloatArray:
+    """``(F,)`` length of the longest edge of each face: the numbers of
+    ``np.linalg.norm(t - np.roll(t, 1, axis=1), axis=2).max(axis=1)``, in one compiled pass."""
+    return longest_edges(np.ascontiguousarray(triangles, dtype=np.float64))
 
 
 def _split_template(n: int) -> FloatArray:
@@ -173,27 +182,17 @@ def story_raster(triangles: FloatArray, normals: FloatArray, floor: float, ceili
     """
     if not len(triangles):
         return StoryRaster(0.0, 0.0, np.full((1, 1), -np.inf), np.full((1, 1), np.nan), np.zeros((1, 1)))
-    centroid = triangles.mean(axis=1)
-    points = np.concatenate([triangles, centroid[:, None]], axis=1)  # corners and centroid mark cells
-    x0, z0 = points[..., 0].min(), points[..., 2].min()
-    i = np.floor((points[..., 0] - x0) / RASTER_M).astype(np.int64)
-    k = np.floor((points[..., 2] - z0) / RASTER_M).astype(np.int64)
-    shape = (int(i.max()) + 1, int(k.max()) + 1)
-    cell = i * shape[1] + k  # (F, 4)
-    height = points[..., 1] if ceiling is None else np.minimum(points[..., 1], ceiling)
-    top = np.full(shape[0] * shape[1], -np.inf)
-    np.maximum.at(top, cell.reshape(-1), height.reshape(-1))
+    tri = np.ascontiguousarray(triangles, dtype=np.float64)
+    centroid = centroids_areas(tri)[0]
     level = normals[:, 1] >= np.cos(np.radians(HORIZONTAL_DEG))
     level &= centroid[:, 1] > floor + FLOOR_CLEARANCE_M
     if ceiling is not None:
         level &= centroid[:, 1] < ceiling - FLOOR_CLEARANCE_M
-    shelf = np.full(shape[0] * shape[1], -np.inf)
-    np.maximum.at(shelf, cell[level].reshape(-1), np.repeat(centroid[level, 1], 4))
-    shelf[np.isinf(shelf)] = np.nan
     on_floor = (normals[:, 1] >= np.cos(np.radians(HORIZONTAL_DEG))) & (np.abs(centroid[:, 1] - floor) <= FLOOR_CLEARANCE_M)
-    floor_cells = np.zeros(shape[0] * shape[1])
-    floor_cells[cell[on_floor].reshape(-1)] = 1.0
-    return StoryRaster(float(x0), float(z0), top.reshape(shape), shelf.reshape(shape), floor_cells.reshape(shape))
+    # corners and centroid mark cells, in one compiled pass per raster step (no (4F,) arrays)
+    x0, z0, top, shelf, floor_cells = plan_rasters(tri, centroid, level, on_floor, np.inf if ceiling is None else float(ceiling), ceiling is not None, RASTER_M)
+    shelf[np.isinf(shelf)] = np.nan
+    return StoryRaster(float(x0), float(z0), top, shelf, floor_cells)
 
 
 @dataclass(frozen=True)
@@ -224,7 +223,10 @@ class Columns:
         return int(len(self.segment))
 
 
-def columns(labels: IntArray, u: FloatArray, vertex_u: FloatArray, vertex_y: FloatArray, v: FloatArray, area: FloatArray, width_m: float) -> Columns:
+def columns(
+    labels: IntArray, u: FloatArray, vertex_u: FloatArray, vertex_y: FloatArray, v: FloatArray, area: FloatArray, width_m: float,
+    v_order: IntArray | None = None,
+) -> Columns:
     """Cut segments into columns ``width_m`` wide along the wall.
 
     Parameters
@@ -241,6 +243,8 @@ def columns(labels: IntArray, u: FloatArray, vertex_u: FloatArray, vertex_y: Flo
         ``(n,)`` area of each face (m2): the weights of the column's plane and centre.
     width_m
         Column width (m).
+    v_order
+        ``np.argsort(v, kind="stable")``, where the caller has it.
     """
     b = np.floor(u / width_m).astype(np.int64)
     span = int(b.max() - b.min()) + 1
@@ -250,21 +254,28 @@ def columns(labels: IntArray, u: FloatArray, vertex_u: FloatArray, vertex_y: Flo
     m = len(keys)
     rep = np.repeat(face_column, 3)
     u_lo, u_hi, y_lo, y_hi = np.full(m, np.inf), np.full(m, -np.inf), np.full(m, np.inf), np.full(m, -np.inf)
-    np.minimum.at(u_lo, rep, vertex_u.reshape(-1))
-    np.maximum.at(u_hi, rep, vertex_u.reshape(-1))
-    np.minimum.at(y_lo, rep, vertex_y.reshape(-1))
-    np.maximum.at(y_hi, rep, vertex_y.reshape(-1))
+    vu, vy = np.ascontiguousarray(vertex_u, dtype=np.float64).reshape(-1), np.ascontiguousarray(vertex_y, dtype=np.float64).reshape(-1)
+    scatter_min(u_lo, rep, vu)
+    scatter_max(u_hi, rep, vu)
+    scatter_min(y_lo, rep, vy)
+    scatter_max(y_hi, rep, vy)
     col_area = np.bincount(face_column, weights=area, minlength=m).astype(np.float64)
     centre = np.bincount(face_column, weights=area * u, minlength=m) / np.maximum(col_area, 1e-300)
-    offset = group_weighted_median(face_column, v, area, m)
+    offset = group_weighted_median(face_column, v, area, m, v_order)
     return Columns(keys[:, 0], keys[:, 1], u_lo, u_hi, y_lo, y_hi, offset, centre, col_area, face_column)
 
 
-def group_weighted_median(labels: IntArray, values: FloatArray, weights: FloatArray, k: int) -> FloatArray:
+def group_weighted_median(labels: IntArray, values: FloatArray, weights: FloatArray, k: int, value_order: IntArray | None = None) -> FloatArray:
     """``(k,)`` weighted median of ``values`` in each group ``0 .. k-1`` of ``labels`` (every
     group must hold at least one value): the plane of a wall or of a strip of it, robust to the
-    few faces of a fixture or a frame in front of it."""
-    order = np.lexsort((values, labels))
+    few faces of a fixture or a frame in front of it.
+
+    ``value_order`` is ``np.argsort(values, kind="stable")`` where the caller has it (several
+    groupings of the same values): the order is that of ``np.lexsort((values, labels))``, a
+    stable sort by value then a stable counting sort by group."""
+    if value_order is None:
+        value_order = np.argsort(values, kind="stable")
+    order = value_order[stable_group_order(np.asarray(labels, dtype=np.int64)[value_order], int(k))]
     lab, val, w = labels[order], values[order], weights[order]
     cw = np.cumsum(w)
     start = np.searchsorted(lab, np.arange(k))

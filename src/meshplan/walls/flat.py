@@ -29,6 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.stats import t as student_t
 
+from .._kernels import centroids_areas, scatter_max, scatter_min
 from ..geometry import FloatArray, IntArray, Mesh
 from ..orient import Orientation
 from .boxdbscan import box_dbscan
@@ -250,7 +251,7 @@ def wall_directions(
         return np.array(out) if mode != "principal" and (mode == "all" or others) else axes
     vertical = np.abs(normals[:, 1]) < np.sin(np.radians(VERTICAL_DEG))
     plan = normals[vertical][:, [0, 2]]
-    plan = plan / np.maximum(np.linalg.norm(plan, axis=1), 1e-12)[:, None]
+    plan = plan / np.maximum(np.sqrt(plan[:, 0] * plan[:, 0] + plan[:, 1] * plan[:, 1]), 1e-12)[:, None]  # np.linalg.norm(plan, axis=1)
     w = areas[vertical]
     cos_tol = np.cos(np.radians(facing_tolerance_deg))
     az = np.degrees(np.arctan2(plan[:, 1], plan[:, 0])) % 360.0
@@ -258,12 +259,12 @@ def wall_directions(
     centres = np.radians(np.arange(360) + 0.5)
     compass = np.c_[np.cos(centres), np.sin(centres)]
     for _ in range(16):  # at most 16 directions more: one every 22 degrees
-        left = np.max(plan @ np.array(out).T, axis=1) < cos_tol
+        left = _row_max(plan @ np.array(out).T) < cos_tol
         if not left.any():
             break
         hist = np.bincount(np.floor(az[left]).astype(np.int64) % 360, weights=w[left], minlength=360)
         smooth = np.sum([np.roll(hist, k) for k in range(-5, 6)], axis=0)  # +-5 degrees
-        uncovered = np.max(compass @ np.array(out).T, axis=1) < cos_tol
+        uncovered = _row_max(compass @ np.array(out).T) < cos_tol
         background = 11.0 * float(hist[uncovered].mean()) if uncovered.any() else 0.0
         j = int(np.argmax(smooth))
         if smooth[j] < FILL_MIN_AREA_M2 or smooth[j] < FILL_PEAK_RATIO * background:
@@ -276,11 +277,21 @@ def wall_directions(
     return np.array(out) if found else axes
 
 
+def _row_max(a: FloatArray) -> FloatArray:
+    """``a.max(axis=1)`` of a few columns, column by column (numpy's reduction over a short
+    last axis is many times slower; the maxima are the same numbers)."""
+    out = a[:, 0].copy()
+    for j in range(1, a.shape[1]):
+        np.maximum(out, a[:, j], out=out)
+    return out
+
+
 def _group_minmax(labels: IntArray, values: FloatArray, k: int) -> tuple[FloatArray, FloatArray]:
     lo = np.full(k, np.inf)
     hi = np.full(k, -np.inf)
-    np.minimum.at(lo, labels, values)
-    np.maximum.at(hi, labels, values)
+    v = np.ascontiguousarray(values, dtype=np.float64)
+    scatter_min(lo, labels, v)
+    scatter_max(hi, labels, v)
     return lo, hi
 
 
@@ -554,16 +565,18 @@ def find_flat_walls(mesh: Mesh, orientation: Orientation, params: WallParams | N
     params = params or WallParams()
     in_stories = orientation.face_story >= 0
     dirs = wall_directions(orientation, params.wall_directions, mesh.face_normals[in_stories], mesh.face_areas[in_stories], params.facing_tolerance_deg)
+    width = params.box_length_m / 2  # columns: the resolution along the wall of a DBSCAN box
+    cos_tol = np.cos(np.radians(params.facing_tolerance_deg))
     # DBSCAN counts centroids: faces larger than the box (parametric models) are split so that
     # the centroids sample the surface evenly; dense scans are left as they are
     tri, parent = subdivide(mesh.triangles, SPLIT_SHARE * params.box_length_m)
-    normals = mesh.face_normals[parent]
-    centroids = tri.mean(axis=1)
-    cross = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
-    areas = 0.5 * np.linalg.norm(cross, axis=1)
-    face_story = orientation.face_story[parent]
-    width = params.box_length_m / 2  # columns: the resolution along the wall of a DBSCAN box
-    cos_tol = np.cos(np.radians(params.facing_tolerance_deg))
+    split = len(tri) != mesh.n_faces
+    normals = mesh.face_normals[parent] if split else mesh.face_normals
+    # tri.mean(axis=1) and |(t1 - t0) x (t2 - t0)| / 2, the same numbers in one compiled pass
+    centroids, areas = centroids_areas(np.ascontiguousarray(tri))
+    face_story = orientation.face_story[parent] if split else orientation.face_story
+    # the faces facing each wall direction, the same in every story
+    facing = [normals @ np.array([d[0], 0.0, d[1]]) >= cos_tol for d in dirs]
     piece_segment = np.full(len(tri), -1, dtype=np.int64)
     seg_story: list[int] = []
     seg_kept: list[bool] = []
@@ -582,7 +595,7 @@ def find_flat_walls(mesh: Mesh, orientation: Orientation, params: WallParams | N
         for d_index, d in enumerate(dirs):
             n3 = np.array([d[0], 0.0, d[1]])
             t3 = np.array([-d[1], 0.0, d[0]])
-            idx = np.flatnonzero(in_story & (normals @ n3 >= cos_tol))
+            idx = np.flatnonzero(in_story & facing[d_index])
             if len(idx) < params.min_points:
                 continue
             c = centroids[idx]
@@ -595,9 +608,11 @@ def find_flat_walls(mesh: Mesh, orientation: Orientation, params: WallParams | N
             lab, fidx = labels[ok], idx[ok]
             verts = tri[fidx]  # (n, 3, 3)
             vu = verts @ t3
-            offset = group_weighted_median(lab, pts[ok, 1], areas[fidx], k)
+            across_c = pts[ok, 1]
+            across_order = np.argsort(across_c, kind="stable")  # shared by the two medians
+            offset = group_weighted_median(lab, across_c, areas[fidx], k, across_order)
             u_lo, u_hi = _group_minmax(np.repeat(lab, 3), vu.reshape(-1), k)
-            cols = columns(lab, pts[ok, 0], vu, verts[..., 1], pts[ok, 1], areas[fidx], width)
+            cols = columns(lab, pts[ok, 0], vu, verts[..., 1], across_c, areas[fidx], width, across_order)
             wall, neutral = _wall_columns(cols, raster, d, story.floor, ceiling, width, params)
             wall |= _continues(below, d_index, d, offset, u_lo, u_hi, params)[cols.segment]
             run = runs(cols, wall, neutral)
@@ -626,8 +641,11 @@ def find_flat_walls(mesh: Mesh, orientation: Orientation, params: WallParams | N
             y_lo, y_hi = _group_minmax(np.repeat(sub, 3), verts[..., 1].reshape(-1), m)
             p_off = group_weighted_median(sub, across, areas[fidx], m)
             # support: the faces of the mesh (not their pieces) in each sub-segment
-            pairs = np.unique(sub * np.int64(mesh.n_faces) + parent[fidx])
-            support = np.bincount(pairs // mesh.n_faces, minlength=m)
+            if split:
+                pairs = np.unique(sub * np.int64(mesh.n_faces) + parent[fidx])
+                support = np.bincount(pairs // mesh.n_faces, minlength=m)
+            else:  # every piece is a face of its own
+                support = np.bincount(sub, minlength=m)
             area = np.bincount(sub, weights=areas[fidx], minlength=m)
             present = np.bincount(sub, minlength=m) > 0
             keep = np.zeros(m, dtype=bool)
