@@ -157,7 +157,9 @@ def drafting_figure(
         _place_room_labels(ax, symbols, params, placer)
         chain_texts.place(placer)
         _place_room_dimensions(ax, symbols, sheet, params, placer)
-    legend += draw_annotations(ax, annotations.labels, annotations.kinds, annotations.positions, annotations.directions, placer=placer, legend=False)
+    marks = draw_annotations(ax, annotations.labels, annotations.kinds, annotations.positions, annotations.directions, placer=placer, legend=False)
+    # a user's door or window mark is told apart from the door and window drawn from the scan
+    legend += [(h, f"{n} (annotation)" if n in ("door", "window") else n) for h, n in marks]
     if isinstance(plan, MarkedDrafting) and (len(plan.dashed) or plan.low_rooms or len(plan.low_openings)):
         legend.append((Line2D([], [], color=LOW_CONFIDENCE_COLOR, lw=1.0, ls=LOW_CONFIDENCE_DASH), "low confidence: check on site"))
     _draw_sheet(fig, sheet, params, f"Drafting plan, cut at {cut_text}", _story_name(s, n_stories, params.imperial), scan, north_deg, legend)
