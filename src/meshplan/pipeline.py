@@ -15,10 +15,13 @@ from .geometry import Annotations, Mesh
 from .io import LoadStats
 from .options import RunOptions
 from .orient import assign_faces
+from .orient.stories import without_ceiling
 from .plan import drafting, find_openings, find_rooms, find_stairs, pen_and_ink
 from .plan.elements import RoomEdit, mark_low_confidence, name_rooms, opening_elements, type_rooms, wall_elements
 from .plan.stairs import attach_rooms
-from .result import PAPER_FACES, PAPER_TIMINGS_S, STAGES, Progress, Result, StoryPlans, _Timer
+from .plan.symbols import plan_symbols
+from .result import PAPER_FACES, PAPER_TIMINGS_S, STAGES, Progress, Result, StoryPlans, _read_only, _Timer
+from .slicing import slice_mesh
 from .updown import WEAK_SIGN_EVIDENCE, settle_up
 from .updown import up_by_doors as _up_by_doors
 from .updown import up_in_doubt as _up_in_doubt
@@ -125,6 +128,7 @@ def compute(
     with timer.stage("slice_draw"):
         ann_story = assign_faces(plan_annotations.positions[:, 1], orientation.stories) if len(plan_annotations) else np.zeros(0, np.int64)
         plans = []
+        heights, normal_y = plan_mesh.face_centroids[:, 1], plan_mesh.face_normals[:, 1]
         for story in orientation.stories:
             sel = np.flatnonzero(ann_story == story.index)
             story_ann = Annotations(
@@ -133,12 +137,18 @@ def compute(
                 plan_annotations.positions[sel],
                 plan_annotations.directions[sel],
             )
+            in_story = orientation.face_story == story.index
+            story_faces = np.flatnonzero(in_story)
+            cut = mark_low_confidence(drafting(walls, story, options.plan, openings.holes()), walls, physical, rooms, openings, elements)
             plans.append(
                 StoryPlans(
                     story=story,
                     pen_and_ink=pen_and_ink(plan_mesh, orientation, story, options.plan, options.orient.slab_tolerance_m),
-                    drafting=mark_low_confidence(drafting(walls, story, options.plan, openings.holes()), walls, physical, rooms, openings, elements),
+                    drafting=cut,
                     annotations=story_ann,
+                    symbols=plan_symbols(story.index, walls, openings, rooms, physical, options.render.imperial),
+                    reference=_read_only(slice_mesh(plan_mesh.triangles[story_faces], np.array([cut.height])).segments),
+                    model_faces=_read_only(np.flatnonzero(in_story & without_ceiling(heights, normal_y, story, options.orient.slab_tolerance_m))),
                 )
             )
     warnings = list(orientation.warnings) + list(plausibility_warnings)

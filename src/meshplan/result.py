@@ -25,6 +25,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from .plan import DraftingPlan, Openings, PenAndInkPlan, Room
     from .plan.elements import OpeningElement
     from .plan.stairs import StairElement
+    from .plan.symbols import PlanSymbols
     from .walls import FlatWalls, PhysicalWall
 
 #: The stage timings are logged on the package's logger ("DEBUG meshplan: stage orient: ..."
@@ -49,6 +50,16 @@ class StoryPlans:
     pen_and_ink: PenAndInkPlan
     drafting: DraftingPlan
     annotations: Annotations  # the annotations on this story (plan frame)
+    #: what the drafting sheet draws besides the cut: wall solids, openings, room labels,
+    #: dimension chains (:func:`meshplan.plan.symbols.plan_symbols`), in the plan stage so that
+    #: every backend (PNG/SVG/PDF, DXF) draws the same model
+    symbols: PlanSymbols
+    #: the mesh cut at the drafting height, (n, 2, 3) plan-frame segments: the DXF's reference
+    #: layer under the flat walls
+    reference: np.ndarray
+    #: indices of the story's faces a view from above shows (the ceiling and what lies above it
+    #: removed, :func:`meshplan.orient.stories.without_ceiling`): the story's GLB and 3D view
+    model_faces: np.ndarray
 
 
 def _read_only(a: Any) -> np.ndarray:

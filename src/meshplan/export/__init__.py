@@ -11,11 +11,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-import numpy as np
-
 from ..io import staged_directory
-from ..orient import without_ceiling
-from ..plan.symbols import plan_symbols
 from ..render import (
     drafting_figure,
     figure_bytes,
@@ -25,7 +21,6 @@ from ..render import (
     pen_and_ink_figure,
     segments_figure,
 )
-from ..slicing import slice_mesh
 from .dxf import drafting_dxf
 from .glb import WALL_RGBA, glb_bytes
 from .planjson import dumps, plan_document, plan_schema
@@ -75,10 +70,9 @@ def _dxf_files(story: int, walls_cut, reference, annotations, symbols, rooms) ->
 
 
 def _model_files(result: Result, story: int) -> dict[str, bytes]:
-    o, mesh, sp = result.orientation, result.mesh, result.stories[story]
-    keep = (o.face_story == story) & without_ceiling(mesh.face_centroids[:, 1], mesh.face_normals[:, 1], sp.story, result.options.orient.slab_tolerance_m)
+    mesh, sp = result.mesh, result.stories[story]
     return {
-        f"story-{story}.glb": glb_bytes(mesh.submesh(np.flatnonzero(keep)), sp.annotations, f"story {story}"),
+        f"story-{story}.glb": glb_bytes(mesh.submesh(sp.model_faces), sp.annotations, f"story {story}"),
         f"flat-walls-{story}.glb": glb_bytes(result.walls.mesh(story, result.openings.holes()), sp.annotations, f"flat walls {story}", WALL_RGBA),
     }
 
@@ -93,16 +87,14 @@ def _jobs(result: Result) -> tuple[list[tuple], list[tuple]]:
     for sp in result.stories:
         i = sp.story.index
         sheet = make_sheet(mesh.face_centroids[o.face_story == i][:, [0, 2]], params)
-        symbols = plan_symbols(i, result.walls, result.openings, result.rooms, result.physical_walls, params.imperial)
+        symbols = sp.symbols
         # the title block names the scan file (not its directory) and the north arrow follows --north-deg
         scan, north = Path(result.input.path).name, result.options.export.north_deg
         jobs.append((_pen_files, sp.pen_and_ink, sp.annotations, sheet, params, n, ("png", "svg", "pdf"), scan, north))
         jobs.append((_drafting_files, sp.drafting, sp.annotations, sheet, params, n, symbols, ("png", "svg", "pdf"), scan, north))
         jobs.append((_segments_files, mesh.face_centroids, result.walls, i, sheet, params, n))
-        faces = np.flatnonzero(o.face_story == i)
-        reference = slice_mesh(mesh.triangles[faces], np.array([sp.drafting.height])).segments
         rooms = [r for r in result.rooms if r.story == i]
-        dxf.append((_dxf_files, i, sp.drafting.slices.segments, reference, sp.annotations, symbols, rooms))
+        dxf.append((_dxf_files, i, sp.drafting.slices.segments, sp.reference, sp.annotations, symbols, rooms))
     jobs += [(_normals_files, mesh.face_normals, mesh.face_areas, o), (_levels_files, o, params)]
     return jobs, dxf
 

@@ -18,7 +18,6 @@ import numpy as np
 
 from .._version import __version__
 from ..geometry import ANNOTATION_KINDS, ANNOTATION_PROBE_M, Mesh, transform_directions, transform_points
-from ..orient import without_ceiling
 from .glb import KIND_RGBA, MESH_RGBA, WALL_RGBA
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -127,17 +126,9 @@ def view_meshes(result: Result, max_faces: int = MAX_FACES) -> ViewMeshes:
     fraction of every story's faces is kept (:func:`subsample_faces`), so that the page stays
     responsive; the flat walls (two faces a wall) are always whole.
     """
-    o = result.orientation
     mesh = result.mesh
-    heights = mesh.face_centroids[:, 1]
-    tol = result.options.orient.slab_tolerance_m
-    scan_faces = []
-    walls = []
-    for sp in result.stories:
-        i = sp.story.index
-        keep = (o.face_story == i) & without_ceiling(heights, mesh.face_normals[:, 1], sp.story, tol)
-        scan_faces.append(np.flatnonzero(keep))
-        walls.append(result.walls.mesh(i))
+    scan_faces = [sp.model_faces for sp in result.stories]
+    walls = [result.walls.mesh(sp.story.index) for sp in result.stories]
     n_scan = sum(len(f) for f in scan_faces)
     budget = max(max_faces - sum(w.n_faces for w in walls), 0)
     frac = 1.0 if n_scan <= budget else budget / n_scan
