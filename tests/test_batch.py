@@ -321,3 +321,46 @@ def test_exclude_patterns_and_annotation_pattern(scans, tmp_path, capsys):
     assert main(["batch", str(scans), "-o", str(tmp_path / "none"), "-x", "*"]) == 2
     err = capsys.readouterr().err.strip()
     assert err.startswith("error: ") and len(err.splitlines()) == 1
+
+
+def test_run_and_batch_map_the_same_scan_options(monkeypatch, tmp_path):
+    """Every option of ``run`` that applies to each scan reaches :func:`meshplan.run` from
+    ``batch`` too, under the same keyword (one declaration, one mapping: cli._SCAN_OPTIONS)."""
+    from typer.testing import CliRunner
+
+    import meshplan.api
+    import meshplan.batch
+    from meshplan.cli import app
+
+    class Stop(Exception):
+        pass
+
+    seen: dict[str, dict] = {}
+
+    def fake_run(scan, **kw):
+        seen["run"] = {k: v for k, v in kw.items() if k not in ("annotations", "output", "force", "progress")}
+        raise Stop
+
+    def fake_batch(jobs, output, **kw):
+        seen["batch"] = {k: v for k, v in kw.items() if k not in ("workers", "scheduler", "force", "progress")}
+        raise Stop
+
+    monkeypatch.setattr(meshplan.api, "run", fake_run)
+    monkeypatch.setattr(meshplan.batch, "run_batch", fake_batch)
+    scan = tmp_path / "a.obj"
+    scan.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
+    given = [
+        "--units", "cm", "--gravity", "bbox", "--slices", "50", "--box-length", "0.5", "--wall-directions", "all",
+        "--north-deg", "30", "--site-lat", "48.1", "--ifc", "--imperial", "--set", "dpi=90",
+    ]  # fmt: skip
+    want = {
+        "units": "cm", "gravity_method": "bbox", "slices": 50, "box_length_m": 0.5, "wall_directions": "all",
+        "north_deg": 30.0, "site_lat_deg": 48.1, "ifc": True, "imperial": True, "dpi": 90,
+    }  # fmt: skip
+    runner = CliRunner()
+    r = runner.invoke(app, ["run", str(scan), "-o", str(tmp_path / "out"), *given])
+    assert isinstance(r.exception, Stop), r.output
+    b = runner.invoke(app, ["batch", str(scan), "-o", str(tmp_path / "batch"), *given])
+    assert isinstance(b.exception, Stop), b.output
+    assert seen["run"] == want
+    assert seen["batch"] == want

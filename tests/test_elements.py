@@ -281,3 +281,26 @@ def test_ifc_elements_and_annotations(computed, tmp_path, preset):
         number = result.rooms[int(np.argmax(iou))].number
         spaces = [r.RelatingStructure for r in e.ContainedInStructure or ()] + [r.RelatingStructure for r in e.ReferencedInStructures or ()]
         assert any(s.is_a("IfcSpace") and s.Name == number for s in spaces), a["label"]
+
+
+def test_opening_confidence_reads_the_detector_limits(computed):
+    """An opening's size is judged by the detector's own limits (``PlanParams``), so a user's
+    ``--set door_width_m`` reaches the confidence: with doors limited to 0.6-0.7 m, every door
+    found wider than that (plus the stated margin) is low-confidence for its size."""
+    from dataclasses import replace
+
+    from meshplan.plan.elements import ODD_WIDTH_MARGIN, opening_elements
+
+    _, result = computed("apartment", 1)
+    o = result.openings
+    args = (o, result.walls, result.physical_walls, result.rooms, result.orientation.stories, result.mesh)
+    plain = opening_elements(*args, result.options.plan)
+    narrow = opening_elements(*args, replace(result.options.plan, door_width_m=(0.6, 0.7)))
+    widths = o.u_max - o.u_min
+    doors = [i for i, k in enumerate(o.kind) if k == "door"]
+    assert doors and not any("unusual size" in plain[i].confidence_reason for i in doors)
+    wide = [i for i in doors if widths[i] > 0.7 * (1 + ODD_WIDTH_MARGIN)]
+    assert wide
+    for i in doors:
+        assert ("unusual size" in narrow[i].confidence_reason) == (i in wide)
+        assert (narrow[i].confidence == "low") or i not in wide

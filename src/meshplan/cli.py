@@ -8,12 +8,15 @@ a bug in meshplan, reported in one line with exit status 1 (the traceback with `
 
 from __future__ import annotations
 
+import functools
+import inspect
 import json
 import logging
 import os
 import signal
 import sys
 import threading
+from collections.abc import Callable
 from enum import Enum
 from pathlib import Path
 from typing import Any, Optional
@@ -88,13 +91,150 @@ def _d(name: str, text: str) -> str:
 
     opts = RunOptions()
     value = getattr(getattr(opts, RunOptions.names()[name]), name)
-    return f"{text} [default: {value}]"
+    return f"{text} [default: {value:g}]" if isinstance(value, float) else f"{text} [default: {value}]"
 
 
 def _version(value: bool) -> None:
     if value:
         typer.echo(f"meshplan {__version__}")
         raise typer.Exit()
+
+
+#: The options of ``run`` that apply to every scan of a ``batch`` as well, declared once:
+#: (command-line parameter, its type, the keyword of :func:`meshplan.run`, the typer option).
+#: :func:`_scan_options` adds them to both commands.
+_SCAN_OPTIONS: tuple[tuple[str, str, str, Any], ...] = (
+    ("units", "Optional[Units]", "units", typer.Option(None, "--units", help=_d("units", "Unit of the scan's coordinates."))),
+    ("up", "Optional[Up]", "up", typer.Option(None, "--up", help=_d("up", "Input axis that is roughly up, or auto."))),
+    (
+        "gravity",
+        "Optional[Gravity]",
+        "gravity_method",
+        typer.Option(None, "--gravity", help=_d("gravity_method", "kmeans (paper's Method 2) or bbox (Method 1).")),
+    ),
+    ("slices", "Optional[int]", "slices", typer.Option(None, "--slices", help=_d("slices", "Slicing intervals of the pen-and-ink plan (n + 1 planes)."))),
+    ("opacity", "Optional[float]", "opacity", typer.Option(None, "--opacity", help=_d("opacity", "Opacity of each pen-and-ink slice."))),
+    ("imperial", "Optional[bool]", "imperial", typer.Option(None, "--imperial/--metric", help=_d("imperial", "Scale bars and areas in feet (or metres)."))),
+    ("scale", "Optional[int]", "scale", typer.Option(None, "--scale", help=_d("scale", "Drawing scale 1:N (0 = automatic)."))),
+    ("dpi", "Optional[int]", "dpi", typer.Option(None, "--dpi", help=_d("dpi", "PNG resolution (dots per inch)."))),
+    (
+        "drafting_height",
+        "Optional[float]",
+        "drafting_height_m",
+        typer.Option(None, "--drafting-height", help=_d("drafting_height_m", "Cut height of the drafting plan above the floor (m).")),
+    ),
+    (
+        "box_length",
+        "Optional[float]",
+        "box_length_m",
+        typer.Option(None, "--box-length", help=_d("box_length_m", "DBSCAN box along the wall (m; paper: 1.5 ft).")),
+    ),
+    (
+        "box_depth",
+        "Optional[float]",
+        "box_depth_m",
+        typer.Option(None, "--box-depth", help=_d("box_depth_m", "DBSCAN box across the wall (m; paper: a few inches).")),
+    ),
+    (
+        "box_height",
+        "Optional[float]",
+        "box_height_m",
+        typer.Option(None, "--box-height", help="DBSCAN box height (m) [default: the story's floor-to-ceiling height]."),
+    ),
+    ("min_points", "Optional[int]", "min_points", typer.Option(None, "--min-points", help=_d("min_points", "DBSCAN minimum points in a box."))),
+    (
+        "wall_directions",
+        "Optional[Directions]",
+        "wall_directions",
+        typer.Option(None, "--wall-directions", help=_d("wall_directions", "principal (k = 4), all, or auto.")),
+    ),
+    (
+        "min_wall_length",
+        "Optional[float]",
+        "min_wall_length_m",
+        typer.Option(None, "--min-wall-length", help=_d("min_wall_length_m", "Shortest flat wall kept (m).")),
+    ),
+    (
+        "floor_reach",
+        "Optional[float]",
+        "floor_reach_m",
+        typer.Option(None, "--floor-reach", help=_d("floor_reach_m", "A wall must come this close to the floor (m).")),
+    ),
+    (
+        "ceiling_reach",
+        "Optional[float]",
+        "ceiling_reach_m",
+        typer.Option(None, "--ceiling-reach", help=_d("ceiling_reach_m", "A wall must come this close to the ceiling (m).")),
+    ),
+    (
+        "min_room_height",
+        "Optional[float]",
+        "min_room_height_m",
+        typer.Option(None, "--min-room-height", help=_d("min_room_height_m", "Smallest floor-to-ceiling gap of a story (m).")),
+    ),
+    (
+        "default_ceiling_height",
+        "Optional[float]",
+        "default_ceiling_height_m",
+        typer.Option(None, "--default-ceiling-height", help=_d("default_ceiling_height_m", "Ceiling height assumed when none is scanned (m).")),
+    ),
+    ("ifc", "bool", "ifc", typer.Option(False, "--ifc", help="Also write model.ifc (IFC4; needs the ifc extra).")),
+    ("gbxml", "bool", "gbxml", typer.Option(False, "--gbxml", help="Also write model.gbxml (gbXML 7.03 energy model: a space and zone per room).")),
+    ("idf", "bool", "idf", typer.Option(False, "--idf", help="Also write model.idf (EnergyPlus, translated by OpenStudio; needs the energy extra).")),
+    ("osm", "bool", "osm", typer.Option(False, "--osm", help="Also write model.osm (OpenStudio model; needs the energy extra).")),
+    (
+        "site_lat",
+        "Optional[float]",
+        "site_lat_deg",
+        typer.Option(None, "--site-lat", help=_d("site_lat_deg", "Site latitude of the energy model (degrees north; Chicago O'Hare).")),
+    ),
+    (
+        "site_lon",
+        "Optional[float]",
+        "site_lon_deg",
+        typer.Option(None, "--site-lon", help=_d("site_lon_deg", "Site longitude of the energy model (degrees east).")),
+    ),
+    (
+        "north_deg",
+        "Optional[float]",
+        "north_deg",
+        typer.Option(None, "--north-deg", help=_d("north_deg", "Compass bearing of plan -z, up the page (degrees clockwise from north; 0: plan +z is south).")),
+    ),
+    ("max_faces", "Optional[int]", "max_faces", typer.Option(None, "--max-faces", help="Refuse larger scans [default: what fits in memory].")),
+    ("set_", "list[str]", "", typer.Option([], "--set", help="Any other parameter, NAME=VALUE (see plan.json 'parameters').")),
+)
+#: Flags that are given (True) or left to the parameter's default (False is "not given").
+_FLAGS = frozenset({"ifc", "gbxml", "idf", "osm"})
+
+
+def _scan_options(command: Callable[..., None]) -> Callable[..., None]:
+    """``command`` with the :data:`_SCAN_OPTIONS` added to its signature (typer reads it); the
+    command receives them as ``**options``, and :func:`_run_keywords` maps them to
+    :func:`meshplan.run`'s keywords, so that ``run`` and ``batch`` cannot drift apart."""
+    sig = inspect.signature(command)
+    own = [p for p in sig.parameters.values() if p.kind is not inspect.Parameter.VAR_KEYWORD]
+    added = [inspect.Parameter(name, inspect.Parameter.POSITIONAL_OR_KEYWORD, default=option, annotation=ann) for name, ann, _, option in _SCAN_OPTIONS]
+
+    @functools.wraps(command)
+    def with_options(**given: Any) -> None:
+        command(**given)
+
+    # after the command's own inputs and options, before how it reports (--quiet, --json, -v)
+    at = next((i for i, p in enumerate(own) if p.name == "quiet"), len(own))
+    with_options.__signature__ = sig.replace(parameters=own[:at] + added + own[at:])  # type: ignore[attr-defined]
+    with_options.__annotations__ = {**command.__annotations__, **{name: ann for name, ann, _, _ in _SCAN_OPTIONS}}
+    return with_options
+
+
+def _run_keywords(options: dict[str, Any]) -> dict[str, Any]:
+    """The :data:`_SCAN_OPTIONS` given on the command line (choices as their values, unset ones
+    left out) and the ``--set NAME=VALUE`` ones, as keywords of :func:`meshplan.run`."""
+    keyword = {name: kw for name, _, kw, _ in _SCAN_OPTIONS}
+    params = {
+        keyword[k]: getattr(v, "value", v) for k, v in options.items() if k != "set_" and v is not None and not (k in _FLAGS and v is False)
+    }
+    params.update(_parse_set(options.get("set_", [])))
+    return params
 
 
 @app.callback()
@@ -134,6 +274,7 @@ def _setup_logging(verbose: int, quiet: bool) -> None:
 
 
 @app.command()
+@_scan_options
 def run(
     scan: Path = typer.Argument(
         ...,
@@ -146,78 +287,16 @@ def run(
         None, "--rooms", help="rooms.json (or a previous plan.json) whose room numbers, names and types carry over, matched by position."
     ),
     force: bool = typer.Option(False, "--force", "-f", help="Replace an existing output directory."),
-    units: Optional[Units] = typer.Option(None, "--units", help=_d("units", "Unit of the scan's coordinates.")),
-    up: Optional[Up] = typer.Option(None, "--up", help=_d("up", "Input axis that is roughly up, or auto.")),
-    gravity: Optional[Gravity] = typer.Option(None, "--gravity", help=_d("gravity_method", "kmeans (paper's Method 2) or bbox (Method 1).")),
-    slices: Optional[int] = typer.Option(None, "--slices", help=_d("slices", "Slicing intervals of the pen-and-ink plan (n + 1 planes).")),
-    opacity: Optional[float] = typer.Option(None, "--opacity", help=_d("opacity", "Opacity of each pen-and-ink slice.")),
-    imperial: Optional[bool] = typer.Option(None, "--imperial/--metric", help=_d("imperial", "Scale bars and areas in feet (or metres).")),
-    scale: Optional[int] = typer.Option(None, "--scale", help=_d("scale", "Drawing scale 1:N (0 = automatic).")),
-    dpi: Optional[int] = typer.Option(None, "--dpi", help=_d("dpi", "PNG resolution (dots per inch).")),
-    drafting_height: Optional[float] = typer.Option(
-        None, "--drafting-height", help=_d("drafting_height_m", "Cut height of the drafting plan above the floor (m).")
-    ),
-    box_length: Optional[float] = typer.Option(None, "--box-length", help=_d("box_length_m", "DBSCAN box along the wall (m; paper: 1.5 ft).")),
-    box_depth: Optional[float] = typer.Option(None, "--box-depth", help=_d("box_depth_m", "DBSCAN box across the wall (m; paper: a few inches).")),
-    box_height: Optional[float] = typer.Option(None, "--box-height", help="DBSCAN box height (m) [default: the story's floor-to-ceiling height]."),
-    min_points: Optional[int] = typer.Option(None, "--min-points", help=_d("min_points", "DBSCAN minimum points in a box.")),
-    wall_directions: Optional[Directions] = typer.Option(None, "--wall-directions", help=_d("wall_directions", "principal (k = 4), all, or auto.")),
-    min_wall_length: Optional[float] = typer.Option(None, "--min-wall-length", help=_d("min_wall_length_m", "Shortest flat wall kept (m).")),
-    floor_reach: Optional[float] = typer.Option(None, "--floor-reach", help=_d("floor_reach_m", "A wall must come this close to the floor (m).")),
-    ceiling_reach: Optional[float] = typer.Option(None, "--ceiling-reach", help=_d("ceiling_reach_m", "A wall must come this close to the ceiling (m).")),
-    min_room_height: Optional[float] = typer.Option(None, "--min-room-height", help=_d("min_room_height_m", "Smallest floor-to-ceiling gap of a story (m).")),
-    default_ceiling_height: Optional[float] = typer.Option(
-        None, "--default-ceiling-height", help=_d("default_ceiling_height_m", "Ceiling height assumed when none is scanned (m).")
-    ),
-    ifc: bool = typer.Option(False, "--ifc", help="Also write model.ifc (IFC4; needs the ifc extra)."),
-    gbxml: bool = typer.Option(False, "--gbxml", help="Also write model.gbxml (gbXML 7.03 energy model: a space and zone per room)."),
-    idf: bool = typer.Option(False, "--idf", help="Also write model.idf (EnergyPlus, translated by OpenStudio; needs the energy extra)."),
-    osm: bool = typer.Option(False, "--osm", help="Also write model.osm (OpenStudio model; needs the energy extra)."),
-    site_lat: Optional[float] = typer.Option(None, "--site-lat", help=_d("site_lat_deg", "Site latitude of the energy model (degrees north; Chicago O'Hare).")),
-    site_lon: Optional[float] = typer.Option(None, "--site-lon", help=_d("site_lon_deg", "Site longitude of the energy model (degrees east).")),
-    north_deg: Optional[float] = typer.Option(
-        None, "--north-deg", help=_d("north_deg", "Compass bearing of plan -z, up the page (degrees clockwise from north; 0: plan +z is south).")
-    ),
-    max_faces: Optional[int] = typer.Option(None, "--max-faces", help="Refuse larger scans [default: what fits in memory]."),
-    set_: list[str] = typer.Option([], "--set", help="Any other parameter, NAME=VALUE (see plan.json 'parameters')."),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="Print nothing but errors."),
     as_json: bool = typer.Option(False, "--json", help="Print the summary as JSON on stdout."),
     verbose: int = typer.Option(0, "--verbose", "-v", count=True, help="Debug logging (-vv: also the libraries')."),
+    **options: Any,
 ) -> None:
     """Orient a scan, split it into stories and draw its floor plans."""
     from . import api
 
     _setup_logging(verbose, quiet)
-    params = _options(
-        set_,
-        units=units,
-        up=up,
-        gravity_method=gravity,
-        slices=slices,
-        opacity=opacity,
-        imperial=imperial,
-        scale=scale,
-        dpi=dpi,
-        drafting_height_m=drafting_height,
-        box_length_m=box_length,
-        box_depth_m=box_depth,
-        box_height_m=box_height,
-        min_points=min_points,
-        wall_directions=wall_directions,
-        min_wall_length_m=min_wall_length,
-        floor_reach_m=floor_reach,
-        ceiling_reach_m=ceiling_reach,
-        min_room_height_m=min_room_height,
-        default_ceiling_height_m=default_ceiling_height,
-        max_faces=max_faces,
-        ifc=ifc or None,
-        gbxml=gbxml or None,
-        idf=idf or None,
-        osm=osm or None,
-        site_lat_deg=site_lat,
-        site_lon_deg=site_lon,
-        north_deg=north_deg,
-    )
+    params = _run_keywords(options)
     out = output if output is not None else api.default_output_dir(scan)
     from .progress import StageProgress
 
@@ -318,6 +397,7 @@ def schema() -> None:
 
 
 @app.command()
+@_scan_options
 def batch(
     inputs: list[str] = typer.Argument(..., help="Directories of scans (searched recursively), glob patterns (quote them) or scan files."),
     output: Path = typer.Option(..., "--output", "-o", help="Batch directory: one directory per scan, plus summary.csv and summary.json. May exist."),
@@ -326,24 +406,6 @@ def batch(
         None, "--scheduler", help="Run on a Dask cluster at this address (tcp://host:port); its workers must see the same files at the same paths."
     ),
     force: bool = typer.Option(False, "--force", "-f", help="Replace existing per-scan directories (else those scans fail and keep their old results)."),
-    units: Optional[Units] = typer.Option(None, "--units", help=_d("units", "Unit of the scans' coordinates.")),
-    up: Optional[Up] = typer.Option(None, "--up", help=_d("up", "Input axis that is roughly up, or auto.")),
-    gravity: Optional[Gravity] = typer.Option(None, "--gravity", help=_d("gravity_method", "kmeans (paper's Method 2) or bbox (Method 1).")),
-    slices: Optional[int] = typer.Option(None, "--slices", help=_d("slices", "Slicing intervals of the pen-and-ink plan (n + 1 planes).")),
-    imperial: Optional[bool] = typer.Option(None, "--imperial/--metric", help=_d("imperial", "Scale bars and areas in feet (or metres).")),
-    dpi: Optional[int] = typer.Option(None, "--dpi", help=_d("dpi", "PNG resolution (dots per inch).")),
-    scale: Optional[int] = typer.Option(None, "--scale", help=_d("scale", "Drawing scale 1:N (0 = automatic).")),
-    opacity: Optional[float] = typer.Option(None, "--opacity", help=_d("opacity", "Opacity of each pen-and-ink slice.")),
-    drafting_height: Optional[float] = typer.Option(
-        None, "--drafting-height", help=_d("drafting_height_m", "Cut height of the drafting plan above the floor (m).")
-    ),
-    default_ceiling_height: Optional[float] = typer.Option(
-        None, "--default-ceiling-height", help=_d("default_ceiling_height_m", "Ceiling height assumed when none is scanned (m).")
-    ),
-    ifc: bool = typer.Option(False, "--ifc", help="Also write model.ifc for every scan (IFC4; needs the ifc extra)."),
-    gbxml: bool = typer.Option(False, "--gbxml", help="Also write model.gbxml for every scan (gbXML 7.03 energy model)."),
-    idf: bool = typer.Option(False, "--idf", help="Also write model.idf for every scan (EnergyPlus; needs the energy extra)."),
-    osm: bool = typer.Option(False, "--osm", help="Also write model.osm for every scan (OpenStudio; needs the energy extra)."),
     annotations: Optional[str] = typer.Option(
         None, "--annotations", "-a",
         help=(
@@ -354,11 +416,10 @@ def batch(
     exclude: list[str] = typer.Option(
         [], "--exclude", "-x", help="Glob pattern of files that are not scans, on the name or the path (repeatable; e.g. '*.su_planes.ply')."
     ),
-    max_faces: Optional[int] = typer.Option(None, "--max-faces", help="Refuse larger scans [default: what fits in memory]."),
-    set_: list[str] = typer.Option([], "--set", help="Any other parameter, NAME=VALUE (see plan.json 'parameters')."),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="Print nothing but the failed scans' errors."),
     as_json: bool = typer.Option(False, "--json", help="Print the summary as JSON on stdout."),
     verbose: int = typer.Option(0, "--verbose", "-v", count=True, help="Debug logging (-vv: also the libraries')."),
+    **options: Any,
 ) -> None:
     """Run many scans, one output directory each, and summarize them.
 
@@ -372,24 +433,7 @@ def batch(
     from .progress import BatchProgress, print_batch_summary
 
     _setup_logging(verbose, quiet)
-    params = _options(
-        set_,
-        units=units,
-        up=up,
-        gravity_method=gravity,
-        slices=slices,
-        imperial=imperial,
-        dpi=dpi,
-        scale=scale,
-        opacity=opacity,
-        drafting_height_m=drafting_height,
-        default_ceiling_height_m=default_ceiling_height,
-        max_faces=max_faces,
-        ifc=ifc or None,
-        gbxml=gbxml or None,
-        idf=idf or None,
-        osm=osm or None,
-    )
+    params = _run_keywords(options)
     # several inputs (e.g. an unquoted glob the shell expanded) are concatenated, duplicates dropped
     scans = list(dict.fromkeys(p for spec in inputs for p in find_scans(spec, exclude=output, skip=exclude)))
     if not scans:
@@ -409,14 +453,6 @@ def batch(
             typer.echo(f"error: {row.scan}: {row.error}", err=True)
     if summary.failed:  # exit status 1 (main() prints the message)
         raise ScansFailed(f"{len(summary.failed)} of {len(summary.rows)} scans failed", f"see {output / 'summary.csv'}")
-
-
-def _options(settings: list[str], **given: Any) -> dict[str, Any]:
-    """The options given on the command line (choices as their values, unset ones left out)
-    and the ``--set NAME=VALUE`` ones, as keywords of :func:`meshplan.run`."""
-    params = {k: getattr(v, "value", v) for k, v in given.items() if v is not None}
-    params.update(_parse_set(settings))
-    return params
 
 
 def _usage_error_types() -> tuple[type[BaseException], ...]:

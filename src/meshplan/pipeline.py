@@ -120,10 +120,10 @@ def compute(
         physical = join_walls(physical, JOIN_REACH_M)
         rooms = name_rooms(rooms, room_edits)
         physical = wall_elements(physical, rooms, orientation.stories, options.walls.floor_reach_m, options.walls.ceiling_reach_m)
-        elements = opening_elements(openings, walls, physical, rooms, orientation.stories, plan_mesh)
+        elements = opening_elements(openings, walls, physical, rooms, orientation.stories, plan_mesh, options.plan)
         # stairs from the stepped horizontal surfaces; the rooms holding them are stairwells
         stairs = find_stairs(plan_mesh, orientation.stories, options.plan.drafting_height_m, options.orient.slab_tolerance_m)
-        rooms = type_rooms(rooms, elements, openings.kind, plan_mesh, orientation.stories, stairs)
+        rooms = type_rooms(rooms, elements, openings.kind, stairs)
         stairs = attach_rooms(stairs, rooms)
     with timer.stage("slice_draw"):
         ann_story = assign_faces(plan_annotations.positions[:, 1], orientation.stories) if len(plan_annotations) else np.zeros(0, np.int64)

@@ -2,8 +2,8 @@
 
 * **Rooms** are numbered in reading order per story, story number first (``0.01``, ``0.02``, ...:
   rows from the top of the plan down, each row from left to right; x to the right, z down the
-  page), typed from their shape and contents (:func:`room_type`: a *stair* holds a flight of
-  regular steps, a *corridor* is long and narrow with several doors, a *closet* is small, an
+  page), typed from their shape and contents (:func:`type_rooms`: a *stair* holds most of a stair found
+  from the stepped surfaces, :mod:`meshplan.plan.stairs`; :func:`room_type`: a *corridor* is long and narrow with several doors, a *closet* is small, an
   *open* space is large, any other is a *room*) and named. A ``rooms.json`` (or a ``plan.json``,
   whose ``rooms`` block has the same form) passed back with ``--rooms`` renames, renumbers and
   retypes them: each of its rooms goes to the computed room of its story that overlaps it most
@@ -45,6 +45,7 @@ from ..walls import FlatWalls, PhysicalWall
 from ..walls.physical import wall_of_face
 from .drafting import DraftingPlan
 from .openings import Openings
+from .params import PlanParams
 from .rooms import Room
 from .stairs import StairElement
 
@@ -80,22 +81,6 @@ CORRIDOR_MAX_WIDTH_M = 2.5
 #: or a galley kitchen with one or two).
 CORRIDOR_MIN_DOORS = 3
 
-#: Steps of a stair: up-facing surfaces at this many distinct heights or more between the floor
-#: and the ceiling (a storey of 2.5-3 m takes 14-18 risers; half a flight shows 7-9 of them,
-#: while a room's furniture tops, shelves included, give at most 5 regular levels), ...
-STAIR_MIN_STEPS = 7
-#: ... each at least this large (m2: a tread of 0.25 x 0.8 m, less the scan's holes), ...
-STAIR_TREAD_M2 = 0.1
-#: ... whose rises (m) lie in the range building codes allow (0.12-0.22 m) ...
-STAIR_RISE_M = (0.12, 0.22)
-#: ... and are regular (coefficient of variation of the rises at most this): furniture tops
-#: (0.45 m seats, 0.75 m tables, 0.9 m counters) never are.
-STAIR_RISE_CV = 0.35
-#: Heights are binned at this size (m) to find the steps: below half the lowest rise.
-STAIR_BIN_M = 0.04
-#: ... and each step lies this far (m) or more in plan from the one below (a going is 0.22-0.3 m;
-#: the shelves of a bookcase, regular as they are, stand above each other).
-STAIR_GOING_MIN_M = 0.12
 #: A room above a stair of the story below, overlapping it by this share of the smaller, is the
 #: stair's upper end (its floor has the stairwell's opening).
 STAIR_ABOVE_SHARE = 0.3
@@ -108,11 +93,14 @@ STAIR_ROOM_SHARE = 0.25
 #: over union: a re-run moves walls by centimetres, not by half a room.
 MATCH_IOU = 0.3
 
-#: Door and window sizes outside these ranges (m) make an opening low-confidence: the detector's
-#: own limits (``PlanParams``: doors 0.6-1.5 m wide, about 2 m high) with a margin.
-DOOR_WIDTH_M = (0.6, 1.6)
-DOOR_HEIGHT_M = (1.8, 2.6)
-WINDOW_WIDTH_M = (0.3, 3.5)
+#: Door and window sizes outside the detector's own limits (``PlanParams``: ``door_width_m``,
+#: ``door_height_m``, ``window_width_m``) make an opening low-confidence. A measured width may
+#: exceed the upper limit by this share (the scan rounds jambs off, and a width is measured
+#: between the outermost faces), ...
+ODD_WIDTH_MARGIN = 0.1
+#: ... and a door taller than this (m) is odd: doors are 2.0-2.4 m high, and a taller gap in a
+#: wall is a passage or a scan hole reaching the ceiling.
+DOOR_HEAD_MAX_M = 2.6
 #: The hole of an opening is seen on a face when wall-facing triangles in the plane of the face
 #: (within :data:`HOLE_PLANE_M`) cover less than this share of the opening's inner rectangle
 #: (inset by :data:`HOLE_INSET_M` from the jambs, sill and head, where scans round edges off).
@@ -296,63 +284,9 @@ def _number_key(number: str) -> tuple:
         return (1, 0.0, number)
 
 
-def stair_steps(mesh: Mesh, polygon: Polygon, story: Story) -> int:
-    """How many regular steps (:data:`STAIR_MIN_STEPS` ...) the faces inside ``polygon`` show;
-    0 when they show no flight."""
-    c = mesh.face_centroids
-    up = mesh.face_normals[:, 1] > 0.9
-    h = c[:, 1]
-    sel = up & (h > story.floor + 0.08) & (h < story.ceiling - 0.3)
-    x0, z0, x1, z1 = polygon.bounds
-    sel &= (c[:, 0] >= x0) & (c[:, 0] <= x1) & (c[:, 2] >= z0) & (c[:, 2] <= z1)
-    idx = np.flatnonzero(sel)
-    if len(idx) < STAIR_MIN_STEPS:
-        return 0
-    idx = idx[shapely.contains_xy(polygon, c[idx, 0], c[idx, 2])]
-    if len(idx) < STAIR_MIN_STEPS:
-        return 0
-    bins = np.floor((h[idx] - story.floor) / STAIR_BIN_M).astype(np.int64)
-    area = np.bincount(bins, weights=mesh.face_areas[idx])
-    weights = mesh.face_areas[idx]
-    cx = np.bincount(bins, weights=weights * c[idx, 0], minlength=len(area))
-    cz = np.bincount(bins, weights=weights * c[idx, 2], minlength=len(area))
-    full = area >= STAIR_TREAD_M2 / 2
-    # runs of adjacent bins are one level, at their area-weighted height
-    levels = []
-    k = 0
-    while k < len(full):
-        if not full[k]:
-            k += 1
-            continue
-        j = k
-        while j + 1 < len(full) and full[j + 1]:
-            j += 1
-        a = area[k : j + 1]
-        if a.sum() >= STAIR_TREAD_M2:
-            total = float(a.sum())
-            where = (float(cx[k : j + 1].sum()) / total, float(cz[k : j + 1].sum()) / total)
-            levels.append((float(np.average(np.arange(k, j + 1) + 0.5, weights=a)) * STAIR_BIN_M, where))
-        k = j + 1
-    # the longest chain of regular rises, each step beside the one below
-    best = 0
-    for start in range(len(levels)):
-        chain = [levels[start]]
-        for y, where in levels[start + 1 :]:
-            rise = y - chain[-1][0]
-            going = float(np.hypot(where[0] - chain[-1][1][0], where[1] - chain[-1][1][1]))
-            if STAIR_RISE_M[0] <= rise <= STAIR_RISE_M[1] and going >= STAIR_GOING_MIN_M:
-                chain.append((y, where))
-        if len(chain) >= STAIR_MIN_STEPS:
-            rises = np.diff([y for y, _ in chain])
-            if np.std(rises) / np.mean(rises) <= STAIR_RISE_CV:
-                best = max(best, len(chain))
-    return best
-
-
-def room_type(room: Room, doors: int, steps: int) -> tuple[str, str]:
-    """``(type, reason)`` of a room from its shape, its ``doors`` and the ``steps`` it holds."""
-    if steps >= STAIR_MIN_STEPS:
-        return "stair", f"{steps} regular steps"
+def room_type(room: Room, doors: int) -> tuple[str, str]:
+    """``(type, reason)`` of a room from its shape and its ``doors``; stairwells are typed from
+    the stairs found (:func:`type_rooms`)."""
     rect = room.polygon.minimum_rotated_rectangle
     xy = np.asarray(rect.exterior.coords)[:4] if isinstance(rect, Polygon) else np.zeros((4, 2))
     sides = np.linalg.norm(np.diff(np.vstack([xy, xy[:1]]), axis=0), axis=1)
@@ -578,9 +512,14 @@ def opening_elements(
     rooms: tuple[Room, ...],
     stories: tuple[Story, ...],
     mesh: Mesh,
+    params: PlanParams | None = None,
 ) -> tuple[OpeningElement, ...]:
     """The :class:`OpeningElement` of every opening (``physical`` with their rooms, from
-    :func:`wall_elements`)."""
+    :func:`wall_elements`); ``params`` are the detector's, whose size limits an opening's
+    confidence reads."""
+    params = params or PlanParams()
+    door_w = (params.door_width_m[0], params.door_width_m[1] * (1 + ODD_WIDTH_MARGIN))
+    window_w = (params.window_width_m[0], params.window_width_m[1] * (1 + ODD_WIDTH_MARGIN))
     carrier = wall_of_face(physical, len(walls))
     centers = openings.center(walls) if len(openings) else np.zeros((0, 2))
     #: faces standing within 30 degrees of vertical: walls, jambs and door leaves
@@ -624,8 +563,8 @@ def opening_elements(
         seen_sides = {
             int(np.sign(float(walls.normal[g] @ n))) for g, u0, u1, b, t in cuts if _hole_seen(near, walls, int(g), float(u0), float(u1), float(b), float(t))
         }
-        w_lo, w_hi = DOOR_WIDTH_M if kind == "door" else WINDOW_WIDTH_M
-        odd = not (w_lo <= width <= w_hi) or (kind == "door" and not DOOR_HEIGHT_M[0] <= height <= DOOR_HEIGHT_M[1])
+        w_lo, w_hi = door_w if kind == "door" else window_w
+        odd = not (w_lo <= width <= w_hi) or (kind == "door" and not params.door_height_m <= height <= DOOR_HEAD_MAX_M)
         if odd:
             level, why = "low", f"unusual size for a {kind} ({width:.2f} x {height:.2f} m)"
         elif len(seen_sides) >= 2:
@@ -640,8 +579,7 @@ def opening_elements(
 
 
 def type_rooms(
-    rooms: tuple[Room, ...], elements: tuple[OpeningElement, ...], kinds: tuple[str, ...], mesh: Mesh, stories: tuple[Story, ...],
-    stairs: tuple[StairElement, ...] = (),
+    rooms: tuple[Room, ...], elements: tuple[OpeningElement, ...], kinds: tuple[str, ...], stairs: tuple[StairElement, ...] = ()
 ) -> tuple[Room, ...]:
     """The rooms with their type (a rooms.json type is kept) and confidence; a room holding one of
     the ``stairs`` found (:func:`meshplan.plan.stairs.find_stairs`) is a stairwell."""
@@ -660,7 +598,7 @@ def type_rooms(
         elif held:
             kind, reason = "stair", f"holds a stair of {held[0].risers} risers"
         else:
-            kind, reason = room_type(r, doors[i], stair_steps(mesh, r.polygon, stories[r.story]))
+            kind, reason = room_type(r, doors[i])
         out.append(replace(r, type=kind, type_reason=reason, confidence=level, confidence_reason=why))
     # the upper end of a stair: the room above it
     for i, r in enumerate(out):
