@@ -20,6 +20,18 @@ def pytest_configure(config):
     config.addinivalue_line("markers", "hypothesis_cases(n): a hypothesis test that must run at least n generated cases")
 
 
+#: Fixtures that run the whole pipeline (every computing stage of a synthetic scan): a test
+#: using one is a whole-pipeline test, marked ``slow`` so that ``make unit`` (``-m "not slow and
+#: not realscan"``) stays the fast layer.
+WHOLE_PIPELINE_FIXTURES = frozenset({"computed"})
+
+
+def pytest_collection_modifyitems(config, items):
+    for item in items:
+        if WHOLE_PIPELINE_FIXTURES & set(getattr(item, "fixturenames", ())):
+            item.add_marker(pytest.mark.slow)
+
+
 def pytest_terminal_summary(terminalreporter):
     """Report how many cases the hypothesis tests ran (recorded by tests/test_properties.py,
     also across pytest-xdist workers)."""

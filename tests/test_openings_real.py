@@ -18,6 +18,20 @@ from conftest import SHARED
 SCANS = SHARED / "scans"
 TRUTH = SHARED / "truth"
 
+#: Per scan: the fewest sure truth windows found, the most windows found that match no truth
+#: window. Before the window panels, no window was found on any real scan. The other sure
+#: windows (hl2_su_office_chroje, iphone_polycam_tamatebox_tatami_room) are out of reach: the
+#: office's wall is not scanned above 1.3 m, so its window has no head; the tatami room's up is
+#: found along a wall (issue 9).
+REAL_WINDOWS = {
+    # two 0.4 m gap windows, one on the truth's unsure 2.2 m window, the other a hole in the scan
+    "hl2_su_apartment_two_story.ply": (0, 1),
+    "hl2_su_office_chroje.ply": (0, 0),
+    "quest_mruk_radiotwin_lab_parametric.obj": (1, 0),  # a glazing quad over an uncut wall, sill 0.15 m
+    "roomplan_sekhar_library_parametric.ply": (1, 0),  # a window box in the wall plane
+    "roomplan_sekhar_small_room_parametric.ply": (0, 0),
+}
+
 #: Per scan: the fewest sure truth doors found, the most doors found that match no truth door.
 #: Before issue 16 these were 2/3, 0/1, 0/2, 0/3 and 0/1 sure doors.
 REAL_DOORS = {
@@ -43,7 +57,7 @@ def _scores(name: str) -> dict:
 def real_openings():
     if not SCANS.is_dir() or not TRUTH.is_dir():
         pytest.skip("real scans not available (../shared)")
-    return {name: _scores(name) for name in REAL_DOORS if (SCANS / name).is_file()}
+    return {name: _scores(name) for name in sorted(set(REAL_DOORS) | set(REAL_WINDOWS)) if (SCANS / name).is_file()}
 
 
 @pytest.mark.realscan
@@ -65,3 +79,14 @@ def test_real_doors_pooled(real_openings):
     extra = sum(r["doors"]["found"] - r["doors"]["matched"] for r in real_openings.values())
     assert matched >= 0.9 * sure - 1e-9
     assert extra == 0
+
+
+@pytest.mark.realscan
+@pytest.mark.parametrize("name", sorted(REAL_WINDOWS))
+def test_real_windows(real_openings, name):
+    if name not in real_openings:
+        pytest.skip(f"{name} not available")
+    sure_min, extra_max = REAL_WINDOWS[name]
+    w = real_openings[name]["windows"]
+    assert w["matched_sure"] >= sure_min, w
+    assert w["found"] - w["matched"] <= extra_max, w

@@ -17,10 +17,12 @@ across it, positive into the room the face was scanned from):
   lintel, runs up to the ceiling with the floor seen through it beyond the wall. It is a window
   when it has a sill and a head and straight edges on all four sides. Scan holes are ragged and
   are left alone.
-* **panels**: parametric models (RoomPlan, Quest scene models) model a door as a separate box or
-  quad in the wall plane, over an uncut wall. A separate connected piece of the mesh that lies
-  in the wall's slab, covers its rectangle, stands on the floor, has a door's width and height
-  and ends below the ceiling is such a door.
+* **panels**: parametric models (RoomPlan, Quest scene models) model a door or a window as a
+  separate box or quad in the wall plane, over an uncut wall. A separate connected piece of the
+  mesh that lies in the wall's slab, covers its rectangle, stands on the floor, has a door's
+  width and height and ends below the ceiling is such a door. A thin piece of a few large
+  triangles (a modelled primitive, not a fragment of a real scan) centred on the wall's plane,
+  clear of the floor and below the ceiling, with a window's width and height, is a window.
 
 Why one long module: a face's raster (built once) serves both searches, doors read column by
 column and windows as regions, with the shared edge and straightness tests; the parametric door
@@ -63,6 +65,19 @@ PANEL_COVERAGE = 0.9
 #: Pieces of more faces than this are not parametric door panels (a box is 12 triangles, a
 #: quad 2; a real scan's fragments of this size are furniture or clutter).
 PANEL_MAX_FACES = 200
+
+#: A window panel is a modelled primitive: its largest triangle covers at least this share of
+#: its rectangle (a quad's two triangles cover half each, a box's front faces the same), which
+#: no fragment of a real scan of tens of triangles does.
+PANEL_PRIMITIVE_SHARE = 0.25
+#: A window panel lies in the wall's plane: its middle within this distance (m) of the face and
+#: its thickness at most :data:`PANEL_THICKNESS_M` (RoomPlan's and Quest's window boxes are flat,
+#: mm to cm; a television or a picture box stands in front of the wall).
+PANEL_PLANE_M = 0.02
+PANEL_THICKNESS_M = 0.05
+#: A window panel's bottom is at least this far (m) above the floor (a door panel stands on it;
+#: modelled full-height glazing has sills of 0.1-0.2 m).
+PANEL_SILL_MIN_M = 0.1
 
 #: Tallest common door head above the floor (m; heads are 1.9-2.4 m): beside a gap whose lintel
 #: the scan missed, a wall rises above it, while wardrobes and partition screens (2.0-2.2 m) do not.
@@ -172,7 +187,7 @@ class WallEvidence:
 
     def panels(self) -> tuple[IntArray, IntArray]:
         """``(faces, starts)``: the faces of every small separate piece of the mesh that is tall
-        enough for a door, grouped (piece ``i`` is ``faces[starts[i]:starts[i + 1]]``)."""
+        enough for a door or a window, grouped (piece ``i`` is ``faces[starts[i]:starts[i + 1]]``)."""
         if self._panels is None:
             f = self.mesh.faces
             empty = (np.zeros(0, np.int64), np.zeros(1, np.int64))
@@ -189,7 +204,8 @@ class WallEvidence:
             ymax = np.full(k, -np.inf)
             scatter_min(ymin, flab, _min3(y))
             scatter_max(ymax, flab, _max3(y))
-            tall = (counts <= PANEL_MAX_FACES) & (ymax - ymin >= self.params.door_height_m - EDGE_CELLS * self.params.opening_cell_m)
+            shortest = min(self.params.door_height_m, self.params.window_height_m)
+            tall = (counts <= PANEL_MAX_FACES) & (ymax - ymin >= shortest - EDGE_CELLS * self.params.opening_cell_m)
             sel = np.flatnonzero(tall[flab])
             if not len(sel):
                 self._panels = empty
@@ -517,7 +533,7 @@ def _floor_beyond(
 
 
 def _panels(ev: WallEvidence, w: int, floor: float, ceiling: float) -> list[Candidate]:
-    """Separate door boxes or quads of a parametric model lying in face ``w``'s slab."""
+    """Separate door and window boxes or quads of a parametric model lying in face ``w``'s slab."""
     params, walls = ev.params, ev.walls
     faces, starts = ev.panels()
     if len(starts) < 2:
@@ -537,15 +553,23 @@ def _panels(ev: WallEvidence, w: int, floor: float, ceiling: float) -> list[Cand
     umin, umax = np.minimum.reduceat(_min3(u), seg), np.maximum.reduceat(_max3(u), seg)
     ymin, ymax = np.minimum.reduceat(_min3(y), seg), np.maximum.reduceat(_max3(y), seg)
     width = umax - umin
-    ok = np.flatnonzero(
-        (dmin >= far) & (dmax <= near)
-        & (umin >= walls.u_min[w] - tol) & (umax <= walls.u_max[w] + tol)
-        & (ymin <= floor + params.opening_margin_m)
+    in_slab = (dmin >= far) & (dmax <= near) & (umin >= walls.u_min[w] - tol) & (umax <= walls.u_max[w] + tol)
+    doors = (
+        (ymin <= floor + params.opening_margin_m)
         & (ymax - floor >= params.door_height_m - tol) & (ymax <= ceiling - params.opening_margin_m)
         & (width >= params.door_width_m[0]) & (width <= params.door_width_m[1])
     )
+    area = ev.mesh.face_areas[faces]
+    largest = np.maximum.reduceat(area, seg)
+    windows = (
+        (np.abs(0.5 * (dmin + dmax)) <= PANEL_PLANE_M) & (dmax - dmin <= PANEL_THICKNESS_M)
+        & (ymin >= floor + PANEL_SILL_MIN_M) & (ymax <= ceiling - params.opening_margin_m)
+        & (ymax - ymin >= params.window_height_m)
+        & (width >= params.window_width_m[0]) & (width <= params.window_width_m[1])
+        & (largest >= PANEL_PRIMITIVE_SHARE * width * (ymax - ymin))
+    )
     out = []
-    for i in ok:
+    for i in np.flatnonzero(in_slab & (doors | windows)):
         fi = faces[starts[i] : starts[i + 1]]
         along = np.abs(ev.normals[fi] @ n3) >= ev.cos
         if not np.any(along):
@@ -559,5 +583,8 @@ def _panels(ev: WallEvidence, w: int, floor: float, ceiling: float) -> list[Cand
         g[rr, cc] = True
         if g.mean() < PANEL_COVERAGE:
             continue
-        out.append(Candidate("door", w, float(umin[i]), float(umax[i]), floor, float(ymax[i]), "panel"))
+        if doors[i]:
+            out.append(Candidate("door", w, float(umin[i]), float(umax[i]), floor, float(ymax[i]), "panel"))
+        else:
+            out.append(Candidate("window", w, float(umin[i]), float(umax[i]), float(ymin[i]), float(ymax[i]), "panel"))
     return out

@@ -2,8 +2,9 @@
 
 * **Rooms** are numbered in reading order per story, story number first (``0.01``, ``0.02``, ...:
   rows from the top of the plan down, each row from left to right; x to the right, z down the
-  page), typed from their shape and contents (:func:`type_rooms`: a *stair* holds most of a stair found
-  from the stepped surfaces, :mod:`meshplan.plan.stairs`; :func:`room_type`: a *corridor* is long and narrow with several doors, a *closet* is small, an
+  page), typed from their shape and contents (:func:`type_rooms`: a *stair* holds most of a
+  stair found from the stepped surfaces, :mod:`meshplan.plan.stairs`; :func:`room_type`: a
+  *corridor* is long and narrow with several doors, a *closet* is small, an
   *open* space is large, any other is a *room*) and named. A ``rooms.json`` (or a ``plan.json``,
   whose ``rooms`` block has the same form) passed back with ``--rooms`` renames, renumbers and
   retypes them: each of its rooms goes to the computed room of its story that overlaps it most
