@@ -4,6 +4,10 @@ Every user error is printed as one line, ``error: <problem>; <what to do>``, wit
 and no traceback. Progress goes to stderr (``--quiet`` silences it); ``--json`` prints the
 summary as JSON on stdout. Running out of memory is reported the same way; any other exception is
 a bug in meshplan, reported in one line with exit status 1 (the traceback with ``-v``).
+
+Why one long module: each command's options are its documentation (typer reads them from the
+signatures, with the defaults from the stages' parameter classes), and :func:`main`'s one-line
+error handling wraps every command; the shared scan options are declared once (:data:`_SCAN_OPTIONS`).
 """
 
 from __future__ import annotations
@@ -117,6 +121,12 @@ _SCAN_OPTIONS: tuple[tuple[str, str, str, Any], ...] = (
     ("imperial", "Optional[bool]", "imperial", typer.Option(None, "--imperial/--metric", help=_d("imperial", "Scale bars and areas in feet (or metres)."))),
     ("scale", "Optional[int]", "scale", typer.Option(None, "--scale", help=_d("scale", "Drawing scale 1:N (0 = automatic)."))),
     ("dpi", "Optional[int]", "dpi", typer.Option(None, "--dpi", help=_d("dpi", "PNG resolution (dots per inch)."))),
+    (
+        "sheet",
+        "Optional[str]",
+        "sheet",
+        typer.Option(None, "--sheet", help=_d("sheet", "Paper: A4-A0, Letter, Tabloid, ANSI-B, Arch-D, auto (smallest that fits) or fit (a fitted page).")),
+    ),
     (
         "drafting_height",
         "Optional[float]",

@@ -50,6 +50,10 @@ Orientation: ``north_deg`` is the compass bearing (degrees clockwise from true n
 above) of gbXML +y, which is plan -z, up the page. The default, 0, makes up the page north and
 plan +z south. A facade's orientation is the bearing of its outward normal, in four 90-degree
 sectors centred on N, E, S and W.
+
+Why one long module: gbXML's campus, spaces, zones, surfaces, openings and constructions are one
+document whose ids refer to each other; its writer follows the schema's order, with the
+surface orientation rules above shared by every surface kind.
 """
 
 from __future__ import annotations

@@ -19,6 +19,9 @@ risers``). Its footprint is the union of the hulls of consecutive treads; the vo
 part of the upper floor that was not scanned over the footprint (:func:`stair_void`). Everything
 the stair symbol needs is kept: the treads (polygons and heights), the walking line with the
 direction of ascent, and the plan's cut height (the treads above it are drawn dashed).
+
+Why one long module: finding the treads, chaining them into flights, counting the risers, the
+footprint and the void above are one detector whose steps share the tread arrays.
 """
 
 from __future__ import annotations
