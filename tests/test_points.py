@@ -247,3 +247,142 @@ def test_pen_and_ink_plan_of_a_cloud_is_the_slices_of_its_splats(tmp_path, apart
     assert len(segments) > 10_000
     # the cut of a splat is no longer than its side (a few cm), not a metre-wide stray line
     assert np.percentile(np.linalg.norm(segments[:, 1] - segments[:, 0], axis=1), 99) < 4 * VOXEL_M
+
+
+# ----------------------------------------------------------------------------------------------
+# LAS units from the CRS; what plan.json says of a cloud
+
+#: The US survey foot, metres (1200/3937, exact by definition).
+US_FOOT_M = 1200.0 / 3937.0
+
+#: WKT1 of a state plane CRS in US survey feet (EPSG 2227), and a compound one with metre heights.
+WKT_US_FEET = (
+    'PROJCS["NAD83 / California zone 3 (ftUS)",GEOGCS["NAD83",DATUM["North_American_Datum_1983",'
+    'SPHEROID["GRS 1980",6378137,298.257222101]],PRIMEM["Greenwich",0],UNIT["degree",0.0174532925199433]],'
+    'PROJECTION["Lambert_Conformal_Conic_2SP"],PARAMETER["false_easting",6561666.667],'
+    'UNIT["US survey foot",0.3048006096012192,AUTHORITY["EPSG","9003"]],AXIS["Easting",EAST],AXIS["Northing",NORTH],'
+    'AUTHORITY["EPSG","2227"]]'
+)
+WKT_US_FEET_METRE_HEIGHTS = (
+    f'COMPD_CS["NAD83 / California zone 3 (ftUS) + NAVD88 height",{WKT_US_FEET},'
+    'VERT_CS["NAVD88 height",VERT_DATUM["North American Vertical Datum 1988",2005],UNIT["metre",1,AUTHORITY["EPSG","9001"]],'
+    'AXIS["Gravity-related height",UP]]]'
+)
+
+#: y up (the synthetic scans) to LAS's z up: (x, y, z) -> (x, -z, y), a rotation.
+Y_UP_TO_Z_UP = np.array([[1.0, 0.0, 0.0, 0.0], [0.0, 0.0, -1.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0]])
+
+
+def geo_keys_vlr(keys):
+    """A GeoKeyDirectoryTag record holding ``keys`` ``{key id: value}`` (all stored inline)."""
+    from laspy.vlrs.known import GeoKeyDirectoryVlr, GeoKeyEntryStruct
+
+    vlr = GeoKeyDirectoryVlr()
+    entries = [GeoKeyEntryStruct(id=k, tiff_tag_location=0, count=1, value_offset=v) for k, v in keys.items()]
+    vlr.geo_keys = entries
+    vlr.geo_keys_header.number_of_keys = len(entries)
+    return vlr
+
+
+def write_las_crs(path, points_m, horizontal_m, vertical_m, *, wkt=None, geo_keys=None):
+    """``points_m`` (z up, metres) written in the CRS's units, with its WKT or GeoTIFF keys."""
+    from laspy.vlrs.known import WktCoordinateSystemVlr
+
+    stored = points_m / np.array([horizontal_m, horizontal_m, vertical_m])
+    header = laspy.LasHeader(point_format=3, version="1.2")
+    header.scales = np.array([1e-4, 1e-4, 1e-4])
+    header.offsets = stored.min(axis=0)
+    if wkt is not None:
+        header.vlrs.append(WktCoordinateSystemVlr(wkt))
+    if geo_keys is not None:
+        header.vlrs.append(geo_keys_vlr(geo_keys))
+    las = laspy.LasData(header)
+    las.x, las.y, las.z = stored.T
+    las.write(str(path))
+
+
+@pytest.fixture(scope="module")
+def room_z_up():
+    """The synthetic room, sampled at phone density, z up (as LAS is); its truth turned along."""
+    scan = generate(SynthParams(preset="room", seed=1))
+    p, _, _ = sample_cloud(scan.mesh, *PHONE, seed=3)
+    points = p @ Y_UP_TO_Z_UP[:3, :3].T
+    truth = dict(scan.truth, transform=(Y_UP_TO_Z_UP @ np.asarray(scan.truth["transform"], float)).tolist())
+    return points, truth
+
+
+@pytest.mark.parametrize(
+    "crs, horizontal_m, vertical_m, named",
+    [
+        ({"wkt": WKT_US_FEET}, US_FOOT_M, US_FOOT_M, "ft"),
+        ({"wkt": WKT_US_FEET_METRE_HEIGHTS}, US_FOOT_M, 1.0, "ft"),
+        ({"geo_keys": {1024: 1, 3072: 2227, 3076: 9003, 4099: 9001}}, US_FOOT_M, 1.0, "ft"),
+        ({"geo_keys": {1024: 1, 3072: 32633, 3076: 9002}}, 0.3048, 0.3048, "ft"),
+        ({"geo_keys": {1024: 1, 3072: 32633, 3076: 9001}}, 1.0, 1.0, "m"),
+    ],
+    ids=["wkt-us-feet", "wkt-compound-us-feet-metre-heights", "geotiff-us-feet-metre-heights", "geotiff-feet", "geotiff-metres"],
+)
+def test_las_units_come_from_its_crs(tmp_path, room_z_up, crs, horizontal_m, vertical_m, named):
+    points, truth = room_z_up
+    path = tmp_path / "room.las"
+    write_las_crs(path, points, horizontal_m, vertical_m, **crs)
+    cloud = read_points(path)
+    assert cloud.crs_units.horizontal_m == pytest.approx(horizontal_m, rel=1e-12)
+    assert cloud.crs_units.vertical_m == pytest.approx(vertical_m, rel=1e-12)
+    result = meshplan.run(path)
+    assert result.input.units == named and result.input.scale_to_m == pytest.approx(horizontal_m, rel=1e-12)
+    _check(result, truth)  # heights within 2 cm, walls and rooms: the cloud was read in metres
+    doc = plan_document(result)
+    assert doc["input"]["scale_to_m"] == pytest.approx(horizontal_m, rel=1e-10) and doc["input"]["units"] == named
+
+
+def test_units_given_override_the_las_crs(tmp_path, room_z_up, caplog):
+    points, _ = room_z_up
+    path = tmp_path / "room.las"
+    # metres in the file, a CRS that wrongly says US feet: --units cm is what the user says
+    write_las_crs(path, points * 100.0, 1.0, 1.0, wkt=WKT_US_FEET)
+    loaded = load_mesh(path, units="cm")
+    assert loaded.stats.units == "cm" and loaded.stats.scale_to_m == 0.01
+    assert np.allclose(np.ptp(loaded.mesh.vertices, axis=0), np.ptp(points, axis=0), atol=0.05)
+    assert "read in --units cm as asked" in caplog.text
+    # without --units the CRS's feet are applied
+    feet = load_mesh(path)
+    assert feet.stats.units == "ft" and np.allclose(np.ptp(feet.mesh.vertices, axis=0), 100.0 * US_FOOT_M * np.ptp(points, axis=0), rtol=0.01)
+
+
+def test_a_las_without_crs_or_with_degrees_is_read_in_units(tmp_path, room_z_up):
+    points, _ = room_z_up
+    write_las(tmp_path / "plain.las", points)
+    assert read_points(tmp_path / "plain.las").crs_units is None
+    geographic = 'GEOGCS["WGS 84",DATUM["WGS_1984",SPHEROID["WGS 84",6378137,298.257223563]],PRIMEM["Greenwich",0],UNIT["degree",0.0174532925199433]]'
+    write_las_crs(tmp_path / "degrees.las", points, 1.0, 1.0, wkt=geographic, geo_keys={1024: 2, 2048: 4326})
+    assert read_points(tmp_path / "degrees.las").crs_units is None
+    stats = load_mesh(tmp_path / "degrees.las", units="ft").stats
+    assert stats.units == "ft" and stats.scale_to_m == pytest.approx(0.3048)
+
+
+def test_plan_json_says_how_a_cloud_was_subsampled(tmp_path, room_z_up):
+    import jsonschema
+
+    from meshplan.export.planjson import plan_schema
+
+    points, _ = room_z_up
+    path = tmp_path / "room.ply"
+    nan = np.full((7, 3), np.nan)
+    write_ply(path, np.concatenate([points, nan]))
+    result = meshplan.run(path, point_voxel_m=0.04)
+    doc = plan_document(result)
+    jsonschema.validate(doc, plan_schema())
+    inp = doc["input"]
+    assert inp["points_read"] == len(points) + 7 and inp["dropped_nonfinite_points"] == 7
+    assert inp["voxel_m"] == 0.04 and doc["parameters"]["input"]["point_voxel_m"] == 0.04
+    # one point per occupied 4 cm voxel: as many as the cells the (finite) points fall into
+    cells = len(np.unique(np.floor(points / 0.04).astype(np.int64), axis=0))
+    assert inp["points"] == result.input.points and abs(inp["points"] - cells) <= 0.01 * cells
+    assert inp["points"] < inp["points_read"] and "parametric" not in inp
+    # a mesh says nothing of points
+    from meshplan.io import write_mesh
+
+    write_mesh(generate(SynthParams(preset="room", seed=1)).mesh, tmp_path / "mesh.ply")
+    mesh_doc = plan_document(meshplan.run(tmp_path / "mesh.ply"))
+    assert "points_read" not in mesh_doc["input"] and "voxel_m" not in mesh_doc["input"]

@@ -18,6 +18,7 @@ from .orient import assign_faces
 from .orient.stories import without_ceiling
 from .plan import drafting, find_openings, find_rooms, find_stairs, pen_and_ink
 from .plan.elements import RoomEdit, mark_low_confidence, name_rooms, opening_elements, type_rooms, wall_elements
+from .plan.parametric import apply_parametric
 from .plan.stairs import attach_rooms
 from .plan.symbols import plan_symbols
 from .result import PAPER_FACES, PAPER_TIMINGS_S, STAGES, Progress, Result, StoryPlans, _read_only, _Timer
@@ -114,6 +115,9 @@ def compute(
             openings = upright.openings
         else:
             openings = find_openings(plan_mesh, orientation, walls, options.plan, physical=physical)
+        if stats.parametric is not None:  # a RoomPlan export: its own doors, windows, furniture
+            p = apply_parametric(stats.parametric, stats.scale_to_m, plan_mesh, orientation, walls, physical, openings, options.walls)
+            walls, physical, openings = p.walls, p.physical, p.openings
         rooms = find_rooms(plan_mesh, orientation, walls, options.plan, options.orient.slab_tolerance_m)
         # building elements: walls meeting at their centre lines, rooms numbered and named,
         # what each wall and opening joins, types and confidences

@@ -60,7 +60,7 @@ def plan_document(result: Result) -> dict[str, Any]:
         "physical_walls": [_physical_wall(w, result) for w in result.physical_walls],
         "rooms": [r.to_dict(_NC, imperial=result.options.render.imperial) for r in result.rooms],
         "openings": [
-            dict(o, **(result.opening_elements[i].to_dict(_NC) if i < len(result.opening_elements) else {}))
+            dict(o, **(result.opening_elements[i].to_dict(_NC) if i < len(result.opening_elements) else {}), source=_opening_source(result, i))
             for i, o in enumerate(result.openings.to_list(result.walls, _NC))
         ],
         "stairs": [s.to_dict(_NC) for s in result.stairs],
@@ -94,12 +94,39 @@ def plan_document(result: Result) -> dict[str, Any]:
             "dropped_degenerate": st.dropped_degenerate,
             "dropped_duplicate": st.dropped_duplicate,
             "faces_flipped": int(np.count_nonzero(o.flipped)),
+            **_input_extras(result),
         },
         "warnings": list(result.warnings),
         "parameters": result.options.to_dict(),
         "timings": {k: round(float(v), 4) for k, v in result.timings.items()},
     }
     return doc
+
+
+def _opening_source(result: Result, i: int) -> str:
+    """Where opening ``i`` came from: ``parametric`` (a door, window or opening box of a
+    parametric model, :mod:`meshplan.plan.parametric`) or ``detected`` (found in the geometry)."""
+    source = result.openings.source
+    return str(source[i]) if i < len(source) else "detected"
+
+
+def _input_extras(result: Result) -> dict[str, Any]:
+    """What ``input`` says besides the counts every scan has: a point cloud's points read before
+    and kept after the voxel subsampling and the voxel size; a parametric model's elements by
+    kind; and always the scale to metres (the unit's, times a USD stage's ``metersPerUnit``; a
+    LAS file's CRS unit, e.g. the US survey foot, exactly)."""
+    st = result.input
+    out: dict[str, Any] = {"scale_to_m": round(float(st.scale_to_m), 12)}
+    if st.points_read:
+        out.update(
+            points_read=int(st.points_read),
+            points=int(st.points),
+            dropped_nonfinite_points=int(st.dropped_nonfinite_points),
+            voxel_m=round(float(result.options.input.point_voxel_m), _ND),
+        )
+    if st.parametric is not None:
+        out["parametric"] = {"kind": "roomplan", "elements": st.parametric.counts()}
+    return out
 
 
 def _voids(result: Result) -> list[dict[str, Any]]:

@@ -5,6 +5,7 @@ from .annotations import annotations_document, load_annotations, parse_annotatio
 from .atomic import atomic_write_bytes, atomic_write_text, check_output_dir, staged_directory
 from .mesh import MESH_FORMATS, POINT_FORMATS, SCAN_FORMATS, UNITS_M, USD_FORMATS, LoadedMesh, LoadStats, is_scan_file, load_mesh, write_mesh
 from .points import PointCloud, read_points
+from .usd import RoomPlanElements
 
 __all__ = [
     "MESH_FORMATS",
@@ -18,6 +19,7 @@ __all__ = [
     "atomic_write_bytes",
     "atomic_write_text",
     "PointCloud",
+    "RoomPlanElements",
     "check_output_dir",
     "is_scan_file",
     "load_annotations",

@@ -23,9 +23,9 @@ import logging
 import os
 import stat
 import struct
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -34,6 +34,9 @@ from ..geometry import Mesh
 from ..units import UNITS_M
 from . import readers
 from .readers import REEXPORT, RawMesh, truncated
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .usd import RoomPlanElements
 
 log = logging.getLogger(__name__)
 
@@ -113,6 +116,11 @@ class LoadStats:
     points_read: int = 0
     points: int = 0
     dropped_nonfinite_points: int = 0
+    #: a RoomPlan export's own elements (:class:`~meshplan.io.usd.RoomPlanElements`: its wall,
+    #: door, window, opening and object boxes, input coordinates), which the plan stage uses as
+    #: such (:func:`meshplan.plan.parametric.apply_parametric`); ``None`` for any other scan.
+    #: Not in :meth:`to_dict` (``plan.json``'s ``input`` counts them).
+    parametric: RoomPlanElements | None = field(default=None, compare=False, repr=False)
 
     @property
     def dropped_faces(self) -> int:
@@ -120,6 +128,7 @@ class LoadStats:
 
     def to_dict(self) -> dict:
         d = asdict(self)
+        del d["parametric"]
         d["dropped_faces"] = self.dropped_faces
         if not self.points_read:  # a mesh: plan.json as before
             for key in ("points_read", "points", "dropped_nonfinite_points"):
@@ -716,9 +725,10 @@ def load_mesh(path: str | os.PathLike, units: str = "m", max_faces: int | None =
             check_header(p, file_type)  # a header claiming far more vertices than the file holds
         return points.load_points(p, file_type, units, max_faces, voxel_m)
     raw: RawMesh
+    parametric = None
     if f".{file_type}" in USD_FORMATS:
         scene = usd.read_usd(p, max_faces)
-        scale, raw = scale * scene.meters_per_unit, scene
+        scale, raw, parametric = scale * scene.meters_per_unit, scene, scene.parametric
     else:
         check_size(p, file_type, max_faces)
         raw = read_raw(p, file_type, points_ok=file_type in ("obj", "off"))
@@ -740,6 +750,7 @@ def load_mesh(path: str | os.PathLike, units: str = "m", max_faces: int | None =
         vertices=mesh.n_vertices,
         faces=mesh.n_faces,
         **counts,
+        parametric=parametric,
     )
     if mesh.n_faces == 0:
         raise InputError(

@@ -28,6 +28,14 @@ converts to metres, subsamples and splats, and returns the same
 point files). E57 (every scan of the file, each moved by its pose into the file's common frame)
 needs the ``pye57`` package and LAS/LAZ ``laspy`` (with ``lazrs`` for LAZ): the ``points`` extra,
 ``pip install 'meshplan[points]'``.
+
+A LAS/LAZ file's coordinates are in the linear unit its coordinate reference system names
+(:func:`las_crs_units`: the OGC WKT record, or the GeoTIFF keys' ``ProjLinearUnitsGeoKey`` and
+``VerticalUnitsGeoKey``; the metre, the international foot, the US survey foot), which is then the
+scan's unit, exactly (``LoadStats.scale_to_m`` 0.3048006096 for US survey feet), unless
+``--units`` names another than the default ``m``. A vertical unit other than the horizontal one
+scales z on its own. No ``pyproj`` is needed; a CRS given only as an EPSG code, or geographic (in
+degrees), leaves the file in ``--units``.
 """
 
 from __future__ import annotations
@@ -53,15 +61,19 @@ if TYPE_CHECKING:
 log = logging.getLogger(__name__)
 
 __all__ = [
+    "EPSG_LINEAR_UNITS_M",
     "PCA_NEIGHBOURS",
     "VOXEL_M",
+    "CrsUnits",
     "PointCloud",
     "Surfels",
     "estimate_surfels",
+    "las_crs_units",
     "load_points",
     "read_points",
     "splat_mesh",
     "voxel_subsample",
+    "wkt_units",
 ]
 
 #: Default voxel size of the subsampling grid, in metres (``point_voxel_m``). 3 cm: coarser than
@@ -160,6 +172,157 @@ _CORNER_ANGLES = np.array([0.0, 2.0 * np.pi / 3.0, 4.0 * np.pi / 3.0])
 _UNIT_CIRCUMRADIUS = float(np.sqrt(4.0 / np.sqrt(3.0)) / np.sqrt(3.0))
 
 
+#: Metres per unit of the linear units a LAS file's GeoTIFF keys name (EPSG unit of measure
+#: codes, the values of ``ProjLinearUnitsGeoKey`` and ``VerticalUnitsGeoKey``): the metre, the
+#: international foot (0.3048 m exactly), the US survey foot (1200/3937 m: 2 ppm longer, 2 cm
+#: over 10 km of state plane coordinates, nothing inside a building, but exact costs nothing),
+#: Clarke's foot, the kilometre.
+EPSG_LINEAR_UNITS_M = {9001: 1.0, 9002: 0.3048, 9003: 1200.0 / 3937.0, 9005: 0.3047972654, 9036: 1000.0}
+
+#: A CRS's unit is taken for one of ``--units``'s (:data:`meshplan.units.UNITS_M`) when their
+#: lengths agree to this relative difference: 1e-4 takes the US survey foot and Clarke's foot
+#: (2 and 9 ppm from the international foot) for ``ft``, and tells every named unit apart.
+CRS_UNIT_MATCH = 1e-4
+
+#: GeoTIFF keys of a LAS file's GeoKeyDirectoryTag record: the projected CRS's linear unit, the
+#: vertical CRS's unit, the geographic CRS's linear unit (geocentric CRSs).
+_PROJ_LINEAR_UNITS_KEY, _VERTICAL_UNITS_KEY, _GEOG_LINEAR_UNITS_KEY = 3076, 4099, 2052
+
+#: WKT keywords of a horizontal CRS whose own unit is linear (WKT1 and WKT2), and of a vertical
+#: one; a WKT1 ``GEOGCS`` alone has an angular unit (degrees), not used.
+_WKT_HORIZONTAL = ("PROJCS", "PROJCRS", "PROJECTEDCRS", "GEOCCS", "LOCAL_CS", "ENGCRS", "ENGINEERINGCRS")
+_WKT_VERTICAL = ("VERT_CS", "VERTCRS", "VERTICALCRS")
+_WKT_UNITS = ("UNIT", "LENGTHUNIT")
+
+
+@dataclass(frozen=True)
+class CrsUnits:
+    """The linear units of a point cloud's coordinate reference system.
+
+    Attributes
+    ----------
+    horizontal_m, vertical_m
+        Metres per unit of x and y, and of z (LAS is z-up); ``vertical_m`` is ``horizontal_m``
+        where the CRS names no vertical unit.
+    name
+        The horizontal unit's name as the file gives it (``US survey foot``, ``metre``, EPSG
+        code ``9003``...).
+    source
+        Where it was read: ``wkt`` (the OGC WKT record) or ``geotiff`` (the GeoKeyDirectoryTag).
+    """
+
+    horizontal_m: float
+    vertical_m: float
+    name: str
+    source: str
+
+
+def _wkt_tree(text: str) -> list:
+    """An OGC WKT string (1 or 2) as nested ``[keyword, arg, ...]`` lists, strings unquoted and
+    numbers as floats; raises ``ValueError`` where it is not WKT."""
+    tokens = re.findall(r'"(?:[^"]|"")*"|[A-Za-z_][A-Za-z0-9_]*|[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|[\[\]\(\),]', text)
+    pos = 0
+
+    def node() -> list:
+        nonlocal pos
+        out: list = [tokens[pos].upper()]
+        pos += 1
+        if pos < len(tokens) and tokens[pos] in "[(":
+            pos += 1
+            while tokens[pos] not in "])":
+                t = tokens[pos]
+                if t == ",":
+                    pos += 1
+                elif t.startswith('"'):
+                    out.append(t[1:-1].replace('""', '"'))
+                    pos += 1
+                elif t[0].isalpha() or t[0] == "_":
+                    out.append(node())
+                else:
+                    out.append(float(t))
+                    pos += 1
+            pos += 1
+        return out
+
+    try:
+        return node()
+    except IndexError:
+        raise ValueError("unbalanced WKT") from None
+
+
+def _wkt_unit(crs: list) -> tuple[float, str] | None:
+    """The linear unit (metres per unit, name) of one CRS node: its own ``UNIT``/``LENGTHUNIT``
+    child, or that of its first axis (WKT2 may put it there)."""
+    for child in crs[1:]:
+        if isinstance(child, list) and child[0] in _WKT_UNITS and len(child) >= 3 and isinstance(child[2], float):
+            return child[2], str(child[1])
+    for child in crs[1:]:
+        if isinstance(child, list) and child[0] == "AXIS":
+            found = _wkt_unit(child)
+            if found is not None:
+                return found
+    return None
+
+
+def wkt_units(text: str) -> CrsUnits | None:
+    """The horizontal and vertical linear units an OGC WKT CRS names (WKT1 ``PROJCS``/
+    ``VERT_CS``/``COMPD_CS``, WKT2 ``PROJCRS``/``VERTCRS``/``COMPOUNDCRS``); ``None`` where it
+    names no linear horizontal unit (a geographic CRS in degrees, or not WKT)."""
+    try:
+        tree = _wkt_tree(text)
+    except (ValueError, IndexError):
+        return None
+    horizontal = vertical = None
+    stack = [tree]
+    while stack:
+        n = stack.pop()
+        if n[0] in _WKT_HORIZONTAL and horizontal is None:
+            horizontal = _wkt_unit(n)
+        elif n[0] in _WKT_VERTICAL and vertical is None:
+            vertical = _wkt_unit(n)
+        elif n[0] not in _WKT_HORIZONTAL + _WKT_VERTICAL:
+            stack.extend(c for c in reversed(n[1:]) if isinstance(c, list))
+    if horizontal is None or not horizontal[0] > 0:
+        return None
+    v = vertical[0] if vertical is not None and vertical[0] > 0 else horizontal[0]
+    return CrsUnits(horizontal[0], v, horizontal[1], "wkt")
+
+
+def las_crs_units(header) -> CrsUnits | None:
+    """The linear units a LAS/LAZ file's CRS names, from its OGC WKT record (preferred, as LAS
+    1.4 asks) or its GeoTIFF keys (``ProjLinearUnitsGeoKey``, ``VerticalUnitsGeoKey``, EPSG unit
+    codes :data:`EPSG_LINEAR_UNITS_M`); ``None`` where it names none (no CRS, a geographic CRS in
+    degrees, or only an EPSG CRS code: reading what unit that code implies needs the EPSG
+    database, which meshplan does not ship; such files are read in ``--units``).
+
+    Parameters
+    ----------
+    header
+        The file's :class:`laspy.LasHeader` (its VLRs and EVLRs are searched).
+    """
+    records = list(getattr(header, "vlrs", None) or ()) + list(getattr(header, "evlrs", None) or ())
+    for rec in records:
+        text = getattr(rec, "string", None)
+        if type(rec).__name__ == "WktCoordinateSystemVlr" and isinstance(text, str) and text.strip():
+            found = wkt_units(text)
+            if found is not None:
+                return found
+    for rec in records:
+        keys = getattr(rec, "geo_keys", None)
+        if type(rec).__name__ != "GeoKeyDirectoryVlr" or not keys:
+            continue
+        values = {int(k.id): int(k.value_offset) for k in keys if int(k.tiff_tag_location) == 0}
+        code = values.get(_PROJ_LINEAR_UNITS_KEY, values.get(_GEOG_LINEAR_UNITS_KEY))
+        if code not in EPSG_LINEAR_UNITS_M:
+            if code is not None:
+                log.warning("LAS GeoTIFF keys: linear unit code %d not known; the coordinates are read in --units", code)
+            continue
+        h = EPSG_LINEAR_UNITS_M[code]
+        v_code = values.get(_VERTICAL_UNITS_KEY)
+        return CrsUnits(h, EPSG_LINEAR_UNITS_M.get(v_code, h) if v_code is not None else h, f"EPSG unit {code}", "geotiff")
+    return None
+
+
 @dataclass(frozen=True, eq=False)
 class PointCloud:
     """Points as read from a file.
@@ -177,6 +340,9 @@ class PointCloud:
         Number of scans the points came from (E57 files hold several; 1 otherwise).
     float32_extent
         Largest absolute coordinate the file stored as float32 (0 when it stored none).
+    crs_units
+        The units the file's coordinate reference system names (LAS/LAZ: :func:`las_crs_units`),
+        or ``None`` where it names none.
     """
 
     points: FloatArray
@@ -184,6 +350,7 @@ class PointCloud:
     intensity: np.ndarray | None = None
     scans: int = 1
     float32_extent: float = 0.0
+    crs_units: CrsUnits | None = None
 
     def __len__(self) -> int:
         return int(len(self.points))
@@ -196,6 +363,7 @@ class PointCloud:
             None if self.intensity is None else self.intensity[keep],
             self.scans,
             self.float32_extent,
+            self.crs_units,
         )
 
 
@@ -349,7 +517,7 @@ def _read_las(path: Path, file_type: str) -> PointCloud:
     names = set(las.point_format.dimension_names)
     color = _colors_u8(np.stack([np.asarray(las.red), np.asarray(las.green), np.asarray(las.blue)], axis=1)) if {"red", "green", "blue"} <= names else None
     intensity = np.asarray(las.intensity, np.float32) if "intensity" in names else None
-    return PointCloud(points, color, intensity)
+    return PointCloud(points, color, intensity, crs_units=las_crs_units(las.header))
 
 
 #: Colour property names of PLY vertices (the usual spellings).
@@ -787,6 +955,34 @@ def splat_mesh(surfels: Surfels) -> Mesh:
     return Mesh(corners.reshape(-1, 3), faces)
 
 
+def _crs_scale(path: Path, crs: CrsUnits | None, units: str, scale: float) -> tuple[str, float, FloatArray]:
+    """The units a cloud is read in: its CRS's (:class:`CrsUnits`) unless ``units`` names others
+    (any but the default ``m``). Returns the unit's name, metres per unit of x and y (the scale
+    of :attr:`LoadStats.scale_to_m`) and the ``(3,)`` metres per unit of x, y and z (LAS's z is
+    vertical, and its CRS may name another unit for it)."""
+    from ..units import UNITS_M
+
+    same = np.full(3, scale)
+    if crs is None:
+        return units, scale, same
+    if units != "m":
+        if abs(crs.horizontal_m - scale) > CRS_UNIT_MATCH * scale:
+            log.warning("%s: its CRS says %s (%.10g m), read in --units %s as asked", path, crs.name, crs.horizontal_m, units)
+        return units, scale, same
+    name = next((u for u, m in UNITS_M.items() if abs(m - crs.horizontal_m) <= CRS_UNIT_MATCH * m), None)
+    if name is None:
+        log.warning("%s: its CRS's unit %s (%.10g m) is none of --units's; read in metres", path, crs.name, crs.horizontal_m)
+        return units, scale, same
+    axes = np.array([crs.horizontal_m, crs.horizontal_m, crs.vertical_m])
+    log.info(
+        "%s: units from its CRS (%s record): %s, %.10g m (vertical %.10g m); --units overrides",
+        path, crs.source, crs.name, crs.horizontal_m, crs.vertical_m,
+    )
+    if crs.vertical_m != crs.horizontal_m:
+        log.warning("%s: its CRS's vertical unit (%.10g m) differs from its horizontal one; annotations are scaled by the horizontal", path, crs.vertical_m)
+    return name, crs.horizontal_m, axes
+
+
 def load_points(
     path: str | Path,
     file_type: str | None = None,
@@ -841,11 +1037,12 @@ def load_points(
                 f"subsample the point cloud, or pass --max-faces {n_est} to try anyway",
             )
         cloud = read_points(p, ft)
+    units, scale, axes = _crs_scale(p, cloud.crs_units, units, scale)
     n_read = len(cloud)
     finite = np.all(np.isfinite(cloud.points), axis=1)
     if not finite.all():
         cloud = cloud.select(finite)
-    metric = PointCloud(cloud.points * scale, cloud.colors, cloud.intensity, cloud.scans, cloud.float32_extent)
+    metric = PointCloud(cloud.points * axes, cloud.colors, cloud.intensity, cloud.scans, cloud.float32_extent)
     kept, _ = voxel_subsample(metric, voxel_m)
     del metric
     if len(kept) < MIN_POINTS:

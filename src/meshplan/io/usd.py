@@ -14,10 +14,22 @@ the ``usd`` extra: ``pip install 'meshplan[usd]'``):
 
 A RoomPlan export (``/Room/Parametric_grp`` holding walls, doors, windows, openings and objects
 as named, scaled ``Cube`` prims, and a floor ``Mesh``) is recognised: its parts are counted by
-kind (:attr:`UsdScene.parts`) and it reads into the same triangles as a conversion that turns each
-cube into its 12 triangles (``roomplan_*_parametric.ply`` in the shared scans). The pipeline
-handles such parametric models already (large triangles are sampled and split; door boxes are
-doors).
+kind (:attr:`UsdScene.parts`), it reads into the same triangles as a conversion that turns each
+cube into its 12 triangles (``roomplan_*_parametric.ply`` in the shared scans), and its boxes are
+kept as they are, :class:`RoomPlanElements` (:attr:`UsdScene.parametric`): the eight corners of
+each, in the same input coordinates as the vertices, with its kind and, for a door, window or
+opening, the wall that holds it (RoomPlan puts them in that wall's ``Wall_<n>_grp``). The plan
+stage (:func:`meshplan.plan.parametric.apply_parametric`) takes the doors and windows from them
+and keeps the furniture's fronts out of the walls.
+
+The layout read, as RoomPlan (iOS 16 and 17) writes it::
+
+    /Room/Parametric_grp/Arch_grp/Wall_0_grp/Wall0      Cube  (size 1, scaled: length x height x 0.1 mm)
+    /Room/Parametric_grp/Arch_grp/Wall_0_grp/Door1      Cube  (a door in Wall0)
+    /Room/Parametric_grp/Arch_grp/Wall_17_grp/Window0   Cube
+    /Room/Parametric_grp/Floor_grp/Floor0               Mesh
+    /Room/Parametric_grp/Object_grp/Storage_grp/Storage4  Cube (objects: Storage, Table, Sofa, Bed...)
+    /Room/Section_grp/livingRoom0                       Xform (RoomPlan's room labels; not read)
 """
 
 from __future__ import annotations
@@ -31,12 +43,12 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
-from ..geometry import BOX_CORNERS, BOX_FACES
+from ..geometry import BOX_CORNERS, BOX_FACES, FloatArray, IntArray
 from .readers import RawMesh, fan
 
 log = logging.getLogger(__name__)
 
-__all__ = ["USD_HINT", "UsdScene", "read_usd"]
+__all__ = ["ROOMPLAN_OPENINGS", "USD_HINT", "RoomPlanElements", "UsdScene", "read_usd"]
 
 #: What to install to read USD.
 USD_HINT = "pip install 'meshplan[usd]'"
@@ -57,6 +69,54 @@ Z_UP_TO_Y_UP = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])
 #: RoomPlan's prim names and the kind of part each stands for.
 _ROOMPLAN_KINDS = {"Wall": "wall", "Door": "door", "Window": "window", "Opening": "opening", "Floor": "floor"}
 _ROOMPLAN_NAME = re.compile(r"^([A-Za-z]+?)(\d+)$")
+#: The group RoomPlan puts a wall and the doors, windows and openings in it into.
+_ROOMPLAN_WALL_GROUP = re.compile(r"^Wall_(\d+)_grp$")
+
+#: RoomPlan's kinds of the openings in a wall.
+ROOMPLAN_OPENINGS = ("door", "window", "opening")
+
+
+@dataclass(frozen=True, eq=False)
+class RoomPlanElements:
+    """RoomPlan's parametric elements: one box per wall, door, window, opening and object, in
+    input coordinates (the stage's units, Y-up, as :attr:`UsdScene.vertices`).
+
+    Attributes
+    ----------
+    kind
+        Per box: ``wall``, ``door``, ``window``, ``opening`` or the object's category in lower
+        case (``storage``, ``table``, ``sofa``, ``bed``...).
+    name
+        Per box, the prim's name (``Wall0``, ``Door1``, ``Storage4``).
+    host
+        Per box, the row of the wall a door, window or opening is in (-1: none, and for walls and
+        objects).
+    corners
+        ``(N, 8, 3)`` corners of each box (a wall is a box 0.1 mm thick), in the order of
+        :data:`meshplan.geometry.BOX_CORNERS` (so ``corners[:, 4] - corners[:, 0]`` is the box's
+        local x edge, ``[:, 2] - [:, 0]`` its y edge and ``[:, 1] - [:, 0]`` its z edge).
+    """
+
+    kind: tuple[str, ...]
+    name: tuple[str, ...]
+    host: IntArray
+    corners: FloatArray
+
+    def __len__(self) -> int:
+        return len(self.kind)
+
+    def of_kind(self, *kinds: str) -> IntArray:
+        """Rows of the boxes of these kinds."""
+        return np.array([i for i, k in enumerate(self.kind) if k in kinds], dtype=np.int64)
+
+    @property
+    def objects(self) -> IntArray:
+        """Rows of the objects (furniture, appliances): every box that is not part of the building."""
+        return np.array([i for i, k in enumerate(self.kind) if k != "wall" and k not in ROOMPLAN_OPENINGS], dtype=np.int64)
+
+    def counts(self) -> dict[str, int]:
+        """Number of boxes of each kind."""
+        return dict(sorted(Counter(self.kind).items()))
 
 
 @dataclass(frozen=True, eq=False)
@@ -78,6 +138,8 @@ class UsdScene(RawMesh):
         (``Mesh``, ``Cube``...) for other stages.
     skipped
         Prims with geometry meshplan does not read (points, curves, point instancers), by type.
+    parametric
+        A RoomPlan export's boxes (:class:`RoomPlanElements`); ``None`` for other stages.
     """
 
     meters_per_unit: float = 1.0
@@ -85,6 +147,7 @@ class UsdScene(RawMesh):
     roomplan: bool = False
     parts: dict[str, int] = field(default_factory=dict)
     skipped: dict[str, int] = field(default_factory=dict)
+    parametric: RoomPlanElements | None = None
 
 
 def _pxr():
@@ -214,6 +277,7 @@ def read_usd(path: Path, max_faces: int | None = None) -> UsdScene:
     parts: Counter[str] = Counter()
     skipped: Counter[str] = Counter()
     roomplan = False
+    boxes: list[tuple[str, str, str | None, np.ndarray]] = []  # RoomPlan: kind, name, host wall's name, corners
     it = iter(Usd.PrimRange(stage.GetPseudoRoot(), Usd.TraverseInstanceProxies()))
     for prim in it:  # one step per prim (a RoomPlan stage holds some 200), not per vertex
         if prim.IsA(UsdGeom.Imageable):
@@ -246,17 +310,42 @@ def read_usd(path: Path, max_faces: int | None = None) -> UsdScene:
         kind = _roomplan_kind(prim) if in_roomplan else None
         roomplan |= kind is not None
         parts[kind or str(prim.GetTypeName())] += 1
+        box = _roomplan_box(prim, kind, world, UsdGeom)
+        if box is not None:
+            boxes.append(box)
     if not faces:
         found = f" ({', '.join(f'{n} {k}' for k, n in skipped.items())} not read)" if skipped else ""
         raise InputError(f"{path}: the USD stage holds no mesh or solid{found}", "export the scan as a mesh")
     v = np.concatenate(verts)
     if up.upper() == "Z":
         v = v @ Z_UP_TO_Y_UP
+    parametric = _roomplan_elements(boxes, up.upper() == "Z") if roomplan and boxes else None
     if roomplan:
         log.info("%s: RoomPlan parametric model: %s", path, ", ".join(f"{n} {k}" for k, n in sorted(parts.items())))
     if skipped:
         log.warning("%s: not read: %s", path, ", ".join(f"{n} {k}" for k, n in skipped.items()))
     return UsdScene(
         v, np.concatenate(faces), objects=sum(parts.values()), meters_per_unit=meters, up_axis=up,
-        roomplan=roomplan, parts=dict(parts), skipped=dict(skipped),
+        roomplan=roomplan, parts=dict(parts), skipped=dict(skipped), parametric=parametric,
     )
+
+
+def _roomplan_box(prim, kind: str | None, world: np.ndarray, UsdGeom) -> tuple[str, str, str | None, np.ndarray] | None:
+    """A RoomPlan box as (kind, name, host wall's name, world corners); ``None`` for other prims
+    (the floor mesh, prims outside ``Parametric_grp``)."""
+    if kind is None or kind == "floor" or not prim.IsA(UsdGeom.Cube):
+        return None
+    group = _ROOMPLAN_WALL_GROUP.match(prim.GetParent().GetName())
+    host = f"Wall{group.group(1)}" if group is not None and kind in ROOMPLAN_OPENINGS else None
+    return kind, prim.GetName(), host, world
+
+
+def _roomplan_elements(boxes: list[tuple[str, str, str | None, np.ndarray]], z_up: bool) -> RoomPlanElements:
+    """The :class:`RoomPlanElements` of the boxes read (kind, name, host wall's name, world
+    corners), turned Y-up as the vertices are."""
+    corners = np.stack([b[3] for b in boxes]).reshape(-1, 8, 3)
+    if z_up:
+        corners = corners @ Z_UP_TO_Y_UP
+    row = {name: i for i, (kind, name, _, _) in enumerate(boxes) if kind == "wall"}
+    host = np.array([row.get(h, -1) if h is not None else -1 for _, _, h, _ in boxes], dtype=np.int64)
+    return RoomPlanElements(tuple(b[0] for b in boxes), tuple(b[1] for b in boxes), host, corners)

@@ -566,7 +566,9 @@ def opening_elements(
         }
         w_lo, w_hi = door_w if kind == "door" else window_w
         odd = not (w_lo <= width <= w_hi) or (kind == "door" and not params.door_height_m <= height <= DOOR_HEAD_MAX_M)
-        if odd:
+        if i < len(openings.source) and openings.source[i] == "parametric":
+            level, why = "high", "the parametric model's own box"
+        elif odd:
             level, why = "low", f"unusual size for a {kind} ({width:.2f} x {height:.2f} m)"
         elif len(seen_sides) >= 2:
             level, why = "high", "frame seen on both faces of its wall"

@@ -59,6 +59,10 @@ class Openings:
     #: ``(face, u_min, u_max, bottom, top)`` to cut out of it (in that face's own ``u``); the
     #: listed ``wall`` first. Empty: only ``wall`` (openings made by hand).
     faces: tuple[tuple[tuple[int, float, float, float, float], ...], ...] = ()
+    #: Per opening, where it came from: ``detected`` (found in the geometry) or ``parametric``
+    #: (a door, window or opening box of a parametric model, :mod:`meshplan.plan.parametric`).
+    #: Empty: every opening detected.
+    source: tuple[str, ...] = ()
 
     def __len__(self) -> int:
         return int(len(self.wall))
