@@ -48,10 +48,6 @@ TRUE_UP = {
 
 #: Scans on which up is still wrong (issue 9, open): strict, so that a fix shows as XPASS.
 KNOWN_WRONG = {
-    "iphone_polycam_tamatebox_tatami_room.glb": (
-        "a 2.67 x 3.74 m room 2.5 m high, half its floor hidden: a wall pair (score 28.6) outweighs floor and "
-        "ceiling (24.5); glTF defines +y as up, but the file format does not reach the estimate (gravity.py docstring)"
-    ),
     "hl1_dangwalsh_desk_fragment.obj": (
         "a fragment: 4.6 m2 of wall against 0.4 m2 of floor, the wall axis scores 4 times the floor's; "
         "given the axis (--up +y) up is 0.7 degrees off"
@@ -85,7 +81,20 @@ def test_every_readable_scan_is_listed():
     [pytest.param(n, marks=pytest.mark.xfail(reason=KNOWN_WRONG[n], strict=True)) if n in KNOWN_WRONG else n for n in sorted(TRUE_UP)],
 )
 def test_up_within_a_degree(name):
-    mesh = load_mesh(real_scan(name)).mesh
-    up_found = orient(mesh).transform[1, :3]  # row 1 of the rotation: up in input coordinates
+    loaded = load_mesh(real_scan(name))
+    # row 1 of the rotation: up in input coordinates (with the up the file's format declares)
+    up_found = orient(loaded.mesh, declared_up=loaded.stats.declared_up).transform[1, :3]
     error = angle_deg(up_found, _true_up(name))
     assert error < MAX_ERROR_DEG, f"up {np.round(up_found, 3).tolist()} is {error:.2f} degrees off"
+
+
+def test_a_gltf_file_gets_its_declared_up_when_the_geometry_cannot_decide():
+    """glTF is +y up by its specification: the reader declares it, and the up search takes it
+    among the candidates the geometry cannot separate (the tatami room: a wall pair 28.6 against
+    floor and ceiling 24.5)."""
+    name = "iphone_polycam_tamatebox_tatami_room.glb"
+    loaded = load_mesh(real_scan(name))
+    assert loaded.stats.declared_up is not None
+    assert angle_deg(orient(loaded.mesh, declared_up=loaded.stats.declared_up).transform[1, :3], _true_up(name)) < MAX_ERROR_DEG
+    # without the format's word the wall pair wins: the prior is what decides
+    assert angle_deg(orient(loaded.mesh).transform[1, :3], _true_up(name)) > 45

@@ -140,3 +140,28 @@ def test_empty_buildings_are_put_the_right_way_up_by_their_doors(computed, prese
     gravity, yaw, heights = errors(result.orientation, scan.truth)
     assert gravity < 0.2 and yaw < 0.3 and max(heights) < 0.02
     assert result.orientation.gravity.sign_by == "doors"
+
+
+def test_a_declared_up_decides_only_where_the_geometry_cannot():
+    """A file format's up (glTF: +y) is a prior among candidates within FORMAT_PRIOR_SHARE of
+    the best score. A cubic room (2.5 m every way) looks the same along every axis: the declared
+    axis is up, whichever it is. A wide room with a ceiling is decided by its geometry, whatever
+    is declared."""
+    v, f = box_room(2.5, 2.5, 2.5, cell=0.1)
+    cube = Mesh(v, f)
+    for axis in ([0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]):
+        assert angle_deg(orient(cube, declared_up=np.array(axis)).transform[1, :3], axis) < 0.5
+    v, f = box_room(6.0, 5.0, 2.5, cell=0.1)
+    wide = Mesh(v, f)  # a wrong declaration
+    assert angle_deg(orient(wide, declared_up=np.array([1.0, 0.0, 0.0])).transform[1, :3], [0, 1, 0]) < 0.5
+
+
+def test_a_gltf_file_declares_y_up(tmp_path):
+    """The reader declares +y for glTF (by its specification) and nothing for PLY."""
+    from meshplan.io import write_mesh
+
+    v, f = box_room(3.0, 3.0, 2.5, cell=0.5)
+    for ext, want in ((".glb", [0.0, 1.0, 0.0]), (".ply", None)):
+        write_mesh(Mesh(v, f), tmp_path / f"room{ext}")
+        up = load_mesh(tmp_path / f"room{ext}").stats.declared_up
+        assert (up is None) if want is None else np.allclose(up, want)

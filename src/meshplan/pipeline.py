@@ -101,7 +101,9 @@ def compute(
         units_explicit = options.input.units != "m"
     with timer.stage("orient"):
         check_not_flat(mesh)
-        orientation, plausibility_warnings = orient_plausibly(mesh, options.input.units, options.orient, units_explicit)
+        orientation, plausibility_warnings = orient_plausibly(
+            mesh, options.input.units, options.orient, units_explicit, None if stats.declared_up is None else np.asarray(stats.declared_up)
+        )
         upright = settle_up(mesh, orientation, options)  # the doors decide when furniture cannot
         orientation, plan_mesh = upright.orientation, upright.mesh
         plan_annotations = annotations.transformed(orientation.transform)

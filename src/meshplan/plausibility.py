@@ -238,10 +238,11 @@ def building_evidence(mesh: Mesh, orientation: Orientation, params: OrientParams
     )
 
 
-def assess(mesh: Mesh, units: str, params: OrientParams) -> Assessment:
-    """Orient ``mesh`` (metres, as read in ``units``) and measure what the orientation found."""
+def assess(mesh: Mesh, units: str, params: OrientParams, declared_up: FloatArray | None = None) -> Assessment:
+    """Orient ``mesh`` (metres, as read in ``units``; ``declared_up`` the format's up, see
+    :func:`meshplan.orient.orient`) and measure what the orientation found."""
     try:
-        o = orient(mesh, params)
+        o = orient(mesh, params, declared_up=declared_up)
     except MeshplanError as exc:
         return Assessment(units, None, exc)
     heights, ceilings = story_heights(mesh, o)
@@ -298,7 +299,9 @@ def _check_up(mesh: Mesh, chosen: Assessment, params: OrientParams) -> None:
 
 
 
-def orient_plausibly(mesh: Mesh, units: str, params: OrientParams, units_explicit: bool) -> tuple[Orientation, tuple[str, ...]]:
+def orient_plausibly(
+    mesh: Mesh, units: str, params: OrientParams, units_explicit: bool, declared_up: FloatArray | None = None
+) -> tuple[Orientation, tuple[str, ...]]:
     """Orient the scan and check that it is a building, in ``units``, the way ``params.up`` says.
 
     Parameters
@@ -311,6 +314,9 @@ def orient_plausibly(mesh: Mesh, units: str, params: OrientParams, units_explici
         Orientation parameters (``up`` explicit unless ``auto``).
     units_explicit
         Whether the user named the units (``--units``), rather than taking the default.
+    declared_up
+        The up the file's format declares (:attr:`meshplan.io.LoadStats.declared_up`), a prior
+        where the geometry cannot decide.
 
     Returns
     -------
@@ -323,7 +329,7 @@ def orient_plausibly(mesh: Mesh, units: str, params: OrientParams, units_explici
         Units that the geometry contradicts (naming the right one), no building, an ``--up``
         that the geometry contradicts, or any error of the orientation itself.
     """
-    chosen = assess(mesh, units, params)
+    chosen = assess(mesh, units, params, declared_up)
     if params.up != "auto":
         _check_up(mesh, chosen, params)
     building = chosen.orientation is not None and not chosen.no_building
@@ -340,7 +346,7 @@ def orient_plausibly(mesh: Mesh, units: str, params: OrientParams, units_explici
         for u in UNITS_M:
             if u == units:
                 continue
-            a = assess(_rescaled(mesh, UNITS_M[u] / UNITS_M[units]), u, params)
+            a = assess(_rescaled(mesh, UNITS_M[u] / UNITS_M[units]), u, params, declared_up)
             log.debug("units %s: %s, heights %s, %s", u, a.grade(), np.round(a.heights, 2).tolist(), a.no_building or a.error or "a building")
             if a.plausible:
                 others.append(a)

@@ -41,6 +41,17 @@ if TYPE_CHECKING:  # pragma: no cover
 log = logging.getLogger(__name__)
 
 #: File extensions meshplan reads, with the trimesh file type for each.
+#: The up direction that a mesh format defines (input coordinates): glTF 2.0 is +y up by its
+#: specification ("glTF uses a right-handed coordinate system ... +Y is up"), and a USD stage
+#: states its ``upAxis``, which :func:`meshplan.io.usd.read_usd` turns to +y. OBJ, PLY, STL and
+#: OFF define none. A prior for the up search only (``declared_up`` of
+#: :func:`meshplan.orient.gravity.estimate_gravity`), carried in :attr:`LoadStats.declared_up`.
+DECLARED_UP = {
+    "glb": (0.0, 1.0, 0.0),
+    "gltf": (0.0, 1.0, 0.0),
+    **{ext.lstrip("."): (0.0, 1.0, 0.0) for ext in (".usd", ".usda", ".usdc", ".usdz")},
+}
+
 MESH_FORMATS = {".obj": "obj", ".ply": "ply", ".glb": "glb", ".gltf": "gltf", ".stl": "stl", ".off": "off"}
 
 #: Point cloud extensions (:mod:`meshplan.io.points`; E57 and LAS/LAZ need the ``points`` extra).
@@ -121,6 +132,9 @@ class LoadStats:
     #: such (:func:`meshplan.plan.parametric.apply_parametric`); ``None`` for any other scan.
     #: Not in :meth:`to_dict` (``plan.json``'s ``input`` counts them).
     parametric: RoomPlanElements | None = field(default=None, compare=False, repr=False)
+    #: the up direction the file's format declares (input coordinates, :data:`DECLARED_UP`;
+    #: ``None`` for formats that declare none), a prior for the up search. Not in :meth:`to_dict`.
+    declared_up: tuple[float, float, float] | None = None
 
     @property
     def dropped_faces(self) -> int:
@@ -128,7 +142,7 @@ class LoadStats:
 
     def to_dict(self) -> dict:
         d = asdict(self)
-        del d["parametric"]
+        del d["parametric"], d["declared_up"]
         d["dropped_faces"] = self.dropped_faces
         if not self.points_read:  # a mesh: plan.json as before
             for key in ("points_read", "points", "dropped_nonfinite_points"):
@@ -751,6 +765,7 @@ def load_mesh(path: str | os.PathLike, units: str = "m", max_faces: int | None =
         faces=mesh.n_faces,
         **counts,
         parametric=parametric,
+        declared_up=DECLARED_UP.get(file_type),
     )
     if mesh.n_faces == 0:
         raise InputError(

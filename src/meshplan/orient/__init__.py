@@ -116,7 +116,7 @@ def _check_floor(normals: FloatArray, heights: FloatArray, areas: FloatArray, fl
         )
 
 
-def orient(mesh: Mesh, params: OrientParams | None = None, up_hint: FloatArray | None = None) -> Orientation:
+def orient(mesh: Mesh, params: OrientParams | None = None, up_hint: FloatArray | None = None, declared_up: FloatArray | None = None) -> Orientation:
     """Level the mesh, find its floors, ceilings and stories, and turn its walls onto the axes.
 
     Parameters
@@ -129,6 +129,9 @@ def orient(mesh: Mesh, params: OrientParams | None = None, up_hint: FloatArray |
         A rough up direction in input coordinates, to use instead of searching for one (see
         :func:`meshplan.pipeline.compute`, which tries the other way up when the scan says
         little about it).
+    declared_up
+        The up direction the file's format declares (input coordinates; glTF: +y), a prior
+        where the geometry cannot decide (:func:`meshplan.orient.gravity.estimate_gravity`).
 
     Raises
     ------
@@ -137,7 +140,7 @@ def orient(mesh: Mesh, params: OrientParams | None = None, up_hint: FloatArray |
     """
     params = params or OrientParams()
     _check_scale(mesh, params)
-    gravity = estimate_gravity(mesh, params, up_hint)
+    gravity = estimate_gravity(mesh, params, up_hint, declared_up)
     areas = mesh.face_areas
 
     def level(up):

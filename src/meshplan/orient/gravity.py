@@ -35,14 +35,10 @@ floor level, and the real scans' truth is levelled on the floor the same way.
 
 Decided against, measured on the 16 real scans (2026-12):
 
-* *A prior from the file format.* glTF defines +y as up and USD states its ``upAxis``; OBJ, PLY,
-  STL and OFF define nothing. As a tie-breaker (never against clear evidence) it would be
-  legitimate for those two formats only, and the rotation-invariance promise would then hold for
-  the others (the property tests turn scans in memory and write OBJ/PLY only). It is not used:
-  the format does not reach this module (a :class:`~meshplan.geometry.Mesh` is vertices and
-  faces; the reader, the pipeline and :func:`meshplan.orient.orient` would have to pass it), and
-  the one scan it would fix (the tatami room, wall pair 28.6 against floor and ceiling 24.5)
-  needs a factor that only a convention, not the geometry, can justify.
+* *A prior from the file format* was first rejected, then adopted (issue 9) as a tie-breaker
+  only: see ``declared_up`` of :func:`estimate_gravity`. glTF defines +y as up (and a USD stage
+  its ``upAxis``, turned +y on reading); OBJ, PLY, STL and OFF define nothing, so for them the
+  answer stays independent of how the file is turned.
 * *Objects ending on the floor* (the lower ends of vertical surfaces at one common level): the
   share of plan cells whose vertical surfaces end at the lowest main level does not separate the
   true axis from a wall's on the tatami room (0.39 against 0.47): furniture stands against walls
@@ -115,6 +111,20 @@ _JACKKNIFE_BLOCK_M = 1.0
 #: weight of the normals when the floor fit is combined with them.
 _NORMALS_ERROR_DEG = 0.4
 
+
+#: Share of the best candidate's score that the axis a file format declares as up (glTF: +y,
+#: by the specification) must reach to be taken instead. A missing ceiling halves the evidence of
+#: the true axis (its weight is the floor and ceiling area) while two opposite walls a room
+#: height apart keep theirs whole, so within a factor of two the geometry cannot decide and the
+#: format's convention does; beyond it the geometry wins (an exporter that ignored the
+#: convention). Measured: the tatami room's floor axis scores 0.86 of a wall pair's; on the real
+#: scans the wrong axes score at most 0.87 of the true one, so no OBJ/PLY decision is near this.
+FORMAT_PRIOR_SHARE = 0.5
+
+#: Largest angle (degrees) between a candidate axis and the declared up for the candidate to be
+#: the declared one: a scan's floor lies within a degree or two of its file's up when the file
+#: follows its convention; the next candidate is a wall, 90 degrees away.
+FORMAT_PRIOR_CONE_DEG = 10.0
 
 @dataclass(frozen=True)
 class Candidate:
@@ -340,11 +350,16 @@ def _bbox_axis(mesh: Mesh) -> FloatArray:
     return unit(rot[:, int(np.argmin(extents))])
 
 
-def estimate_gravity(mesh: Mesh, params: OrientParams, up_hint: FloatArray | None = None) -> GravityEstimate:
+def estimate_gravity(
+    mesh: Mesh, params: OrientParams, up_hint: FloatArray | None = None, declared_up: FloatArray | None = None
+) -> GravityEstimate:
     """The up direction of ``mesh`` in its own coordinates.
 
     ``up_hint``, a rough up direction (input coordinates), replaces the search for the axis and
-    its sign; it is refined all the same.
+    its sign; it is refined all the same. ``declared_up`` is the up the file's format declares
+    (:data:`meshplan.io.mesh.DECLARED_UP`: glTF's +y), a prior, not a fact: it is taken only
+    among the candidates the geometry cannot separate (within :data:`FORMAT_PRIOR_SHARE` of the
+    best score, :data:`FORMAT_PRIOR_CONE_DEG` of the declared axis), and then gives the sign too.
 
     Raises
     ------
@@ -372,11 +387,22 @@ def estimate_gravity(mesh: Mesh, params: OrientParams, up_hint: FloatArray | Non
             plaus *= enclosure(mesh, p.axis, params)
             candidates.append(Candidate(p.axis, weight, plaus, weight * plaus))
         best = max(candidates, key=lambda c: c.score)
+        declared = None if declared_up is None else unit(np.asarray(declared_up, dtype=np.float64))
+        if declared is not None:
+            # the format's up among candidates the geometry cannot separate (FORMAT_PRIOR_SHARE)
+            near = [c for c in candidates if abs(c.axis @ declared) >= np.cos(np.radians(FORMAT_PRIOR_CONE_DEG))]
+            if near and near[0].score >= FORMAT_PRIOR_SHARE * best.score:
+                best = near[0]
+                sign_by = "file axes"  # the file format's declared up
         # the k-means refinement ignores the sign; decide it on the refined axis, whose levels
         # are sharp (a rough axis a few degrees off smears them)
         axis, used = _refine_kmeans(normals, areas, best.axis, params.gravity_cones_deg)
         evidence = sign_evidence(centroids, normals, areas, axis, params)
-        if abs(evidence) < 0.05:
+        if declared is not None and sign_by == "file axes":
+            # the format declares the sign too; the evidence only measures how sure it is
+            rough = axis if axis @ declared >= 0 else -axis
+            evidence = float(evidence if axis @ declared >= 0 else -evidence)
+        elif abs(evidence) < 0.05:
             # no evidence either way: follow the file's convention (its nearest axis points up)
             k = int(np.argmax(np.abs(axis)))
             rough = axis if axis[k] > 0 else -axis

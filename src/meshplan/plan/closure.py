@@ -22,6 +22,8 @@ it by the room's bounding rectangle along the walls' directions when the floor f
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 import shapely
 from shapely.geometry import LineString, Polygon
@@ -36,6 +38,21 @@ MIN_MEETING_ANGLE_DEG = 20.0
 #: Longer than this a wall end is moved 1 mm past the line it meets, so that the two lines cross
 #: and are noded despite rounding (polygonize drops the 1 mm dangles).
 NODE_OVERSHOOT_M = 1e-3
+
+#: A wall end closer than this (m) to another wall line meets it (a corner, a T junction);
+#: farther, it is free: a partition ending in the room or short of the edge of the scan.
+FREE_END_M = 0.02
+
+#: Beyond a door's width, a wall end runs on to the next wall or the edge of the scan only when
+#: the wall was scanned over at least this share of the length it would then have: a partition
+#: a third of which was seen (the rest hidden by a stair, furniture or the sensor's reach) is
+#: still the likeliest reading; a short piece (a jamb, a pillar, a counter's end) implies none.
+PARTITION_SEEN_SHARE = 1.0 / 3.0
+
+#: Beyond a door's width, a wall end runs on only where the floor was seen along at most this
+#: share of the run: a partition that continued would stand on that floor and hide it from one
+#: side or the other (half, since the floor beside a wall reaches into the cells under it).
+RUN_FLOOR_SHARE = 0.5
 
 #: Largest angle (degrees) between two wall pieces taken as one wall line across a gap: within
 #: the alignment's own scatter on a patchy scan; beyond it they are two walls.
@@ -190,3 +207,64 @@ def smooth(piece: Polygon, radius: float) -> Polygon:
     if not parts:
         return piece
     return Polygon(max(parts, key=lambda p: p.area).exterior).simplify(0.01)
+
+
+def run_to_boundary(
+    walls: FlatWalls,
+    index: np.ndarray,
+    u_lo: FloatArray,
+    u_hi: FloatArray,
+    boundary,
+    gap_m: float,
+    reach_m: float,
+    floor_share: Callable[[FloatArray, FloatArray], float] | None = None,
+) -> tuple[FloatArray, FloatArray]:
+    """``u_lo`` and ``u_hi`` with every free wall end run on to the first thing it meets, the
+    line of another wall or ``boundary`` (the story's outline: where the scan ends), when that
+    lies within ``reach_m``.
+
+    A partition scanned only part of the way to another wall or to the edge of the scan (the
+    rest hidden by the stair beside it, or out of the sensor's view) still divides the two
+    spaces on either side: the room is closed along its extension. Up to ``gap_m`` (a door and
+    what scans miss beside it) any free end runs on, as across a door; up to ``reach_m`` (the
+    widest mouth between two spaces that are still two rooms) only the end of a partition
+    scanned over at least :data:`PARTITION_SEEN_SHARE` of the length it would then have (a jamb,
+    a pillar or a counter's end implies no partition across a room), and only where the floor
+    was not seen along the run (``floor_share(a, b)``: the share of the segment ``a``-``b`` over
+    scanned floor, at most :data:`RUN_FLOOR_SHARE`): floor seen where the partition would
+    stand shows that it stops (an open side, an alcove's mouth); floor unseen leaves the
+    partition the likeliest reading. A door's gap shows floor, so the runs up to ``gap_m``
+    are not asked. An end is free when no other wall line passes within :data:`FREE_END_M` of it
+    (after :func:`close_walls`, an end that met a wall overshoots it by
+    :data:`NODE_OVERSHOOT_M`). The walls are the spans given; an end's run does not see the
+    runs of the others.
+    """
+    span = u_hi - u_lo  # as scanned and closed, before any run
+    u_lo, u_hi = u_lo.copy(), u_hi.copy()
+    n = len(index)
+    if boundary is None or not n:
+        return u_lo, u_hi
+    tan, nor, off = walls.tangent[index], walls.normal[index], walls.offset[index]
+    lines = [LineString([u_lo[k] * tan[k] + off[k] * nor[k], u_hi[k] * tan[k] + off[k] * nor[k]]) for k in range(n)]
+    ring = shapely.union_all([shapely.boundary(p) for p in shapely.get_parts(boundary)])
+    for k in range(n):
+        others = shapely.union_all(lines[:k] + lines[k + 1 :]) if n > 1 else None
+        for sign in (-1.0, 1.0):
+            u = u_lo[k] if sign < 0 else u_hi[k]
+            end = u * tan[k] + off[k] * nor[k]
+            if others is not None and shapely.distance(shapely.Point(end), others) <= FREE_END_M:
+                continue
+            ray = LineString([end, end + sign * reach_m * tan[k]])
+            hit = ray.intersection(ring if others is None else shapely.union(ring, others))
+            if hit.is_empty:
+                continue
+            s = min(float(np.dot(np.asarray(p.coords[0]) - end, sign * tan[k])) for p in shapely.get_parts(shapely.extract_unique_points(hit)))
+            if s <= FREE_END_M or s > gap_m and span[k] < PARTITION_SEEN_SHARE * (span[k] + s):
+                continue
+            if s > gap_m and floor_share is not None and floor_share(end, end + s * sign * tan[k]) > RUN_FLOOR_SHARE:
+                continue
+            if sign < 0:
+                u_lo[k] -= s + NODE_OVERSHOOT_M
+            else:
+                u_hi[k] += s + NODE_OVERSHOOT_M
+    return u_lo, u_hi

@@ -64,6 +64,12 @@ class PlanParams:
         Where a wall was not scanned, a room is closed along the walls that were: a wall end
         runs on by at most this much to the wall line it meets, and collinear pieces this far
         apart are joined (the widest door: a partition that nearly reaches a wall closes across it).
+    room_mouth_m
+        Widest mouth between two spaces that are still two rooms (a wide cased opening, a
+        corridor's or a stair's mouth: 2.5 m, wider than double doors at 1.8 m and any stair or
+        corridor of a dwelling or office): a partition scanned over a good part of its length
+        (:data:`meshplan.plan.closure.PARTITION_SEEN_SHARE`) runs on by up to this much to the next
+        wall or the edge of the scan; wider, the spaces are one open plan.
     collinear_wall_m
         Two parallel wall pieces whose lines are this close across are one wall (plaster, scan
         noise; less than a partition's thickness).
@@ -126,6 +132,7 @@ class PlanParams:
         "footprint_closing_m": Real(0.0, MAX_CLOSING_M, why="wider gaps are rooms, not scan holes"),
         "wall_gap_m": _GAP,
         "collinear_wall_m": _GAP,
+        "room_mouth_m": _GAP,
         "open_room_fit_m": _GAP,
         "min_fragment_area_m2": Real(0.0, MAX_LENGTH_M**2, why="larger than any building"),
         "min_room_area_m2": Real(0.0, MAX_LENGTH_M**2, why="larger than any building"),
@@ -156,6 +163,7 @@ class PlanParams:
     footprint_closing_m: float = 0.3
     wall_gap_m: float = 1.5
     collinear_wall_m: float = 0.1
+    room_mouth_m: float = 2.5
     open_room_fit_m: float = 0.3
     min_fragment_area_m2: float = 1.5
     min_room_area_m2: float = 1.0

@@ -11,9 +11,15 @@ measured rooms by hand in Rhino).
    through door openings (an opening does not split a flat wall), so rooms are closed across
    doors. The footprint rather than the floor alone: real scans rarely see the floor up to the
    walls, since furniture stands along them.
+   A partition's free end runs on to the outline (the edge of the scan) or the next wall
+   (:func:`~meshplan.plan.closure.run_to_boundary`): up to ``wall_gap_m`` always, up to
+   ``room_mouth_m`` where a good part of it was scanned and no floor was seen where it would
+   stand (a partition hidden by the stair beside it).
 3. *Rooms.* Parts of a face narrower than a room (the inside of a partition, the strip between
    the outer walls and the outline) are cut off, since a room can leak through them into
-   another face. A part is a room when it is large enough and mostly floored. A room whose
+   another face. A part is a room when it is large enough and mostly floored, or, where its
+   floor was not scanned (a stair, whose treads stand above the floor; a corridor the sensor
+   missed), when walls bound most of it and the sensor saw something in it. A room whose
    boundary follows the outline instead of walls (a wall the scan missed) is kept, ends where
    the footprint does, and is marked ``closed_by="floor"``; a space beyond a wall seen only
    from its other side (a corridor glimpsed through a door) is such a room too.
@@ -34,13 +40,90 @@ from ..geometry import FloatArray, Mesh
 from ..orient import Orientation, Story, slab_faces
 from ..units import FOOT_M
 from ..walls import FlatWalls
-from .closure import MIN_MEETING_ANGLE_DEG, close_walls, end_crossings, straighten
+from .closure import MIN_MEETING_ANGLE_DEG, NODE_OVERSHOOT_M, close_walls, end_crossings, run_to_boundary, straighten
 from .params import PlanParams
 
 #: Where the scanned floor closes a room, its outline loses notches and spikes narrower than
 #: twice this (m): the floor's fringe (where the sensor's reach ends, furniture legs, chair
 #: shadows) is ragged at that scale, a room's own corners and recesses are larger.
 FLOOR_FRINGE_M = 0.2
+
+#: Share of a face's outline that must lie on wall lines for the face to be a room although
+#: its floor was not scanned at floor level (a stair, whose treads stand above it; a corridor
+#: whose floor the sensor missed): three of four sides of a room, so a space open on one side
+#: (a stair foot, a corridor mouth) still counts; an unscanned void outside the building is
+#: bounded by one or two walls at most.
+ENCLOSED_WALL_SHARE = 0.75
+
+#: Share of such a face in which the sensor must have seen something of the story (any surface
+#: between floor and ceiling: treads, walls, furniture), so that space no sensor saw does not
+#: become a room because walls surround it.
+ENCLOSED_SEEN_FRACTION = 0.5
+
+#: Spacing (m) of the grid of points at which a face's floor cover is sampled: finer than the
+#: smallest room width, coarse enough to be cheap.
+COVER_SAMPLE_M = 0.1
+
+#: Spacing (m) of the points along a face's outline at which its distance to the walls is
+#: measured, and how close (m) a point must be to a wall line to lie on it (the 1 mm node
+#: overshoot and the 0.1 mm slits are well inside it).
+RING_SAMPLE_M = 0.1
+ON_WALL_M = 0.02
+
+#: Share of a face's outline that may lie off the wall lines when it is still closed by walls
+#: (the slits' ends, rounding at the nodes).
+OFF_WALL_SHARE = 0.05
+
+#: Fewest points sampled on a face's outline (a tiny face still gets a fair test).
+MIN_RING_SAMPLES = 8
+
+#: Width (m) of the slits cut along the walls into the faces of the arrangement (0.1 mm: far
+#: below any drawing's resolution, far above the rounding of the coordinates).
+SLIT_M = 1e-4
+
+#: How far (m) inside a face a point must lie to be in it rather than on its edge (1 mm).
+INSIDE_M = 1e-3
+
+#: A fragment touches a room when they come this close (m): across a slit, with room to spare.
+TOUCH_M = 2e-3
+
+#: Tolerance (m) of the polygon simplification that drops the collinear points the noding and
+#: the slits leave (5 mm: within the scan's noise, far below a wall's thickness).
+SIMPLIFY_M = 0.005
+
+#: Mitre limit of the buffers of the morphological opening (2: a right-angled corner keeps its
+#: mitre, a spike does not).
+OPENING_MITRE_LIMIT = 2.0
+
+#: The points sampled on a floor triangle lie this many cells apart (0.7, a little under a
+#: cell's half-diagonal times two, so that every cell a triangle covers gets a point).
+FLOOR_SAMPLE_CELLS = 0.7
+
+#: Triangles with an edge longer than this many cells are sampled over their surface for the
+#: footprint; smaller ones count by their vertices, which the closing then joins.
+BIG_TRIANGLE_CELLS = 2.0
+
+#: Most subdivisions of a triangle's edges in :func:`sample_triangles` (bounds the memory for
+#: absurdly large triangles: 64 x 64 / 2 points).
+MAX_SUBDIVISIONS = 64
+
+#: A segment's floor cover is sampled this many cells apart (a fifth: no cell is skipped).
+SEGMENT_SAMPLE_CELLS = 0.2
+
+#: Rooms are numbered from the top of the plan down and from left to right, their centroids
+#: compared to this many decimals of a metre (0.1 m: a row of rooms whose centres differ by
+#: scan noise stays one row).
+ORDER_DECIMALS = 1
+
+#: A room's ring starts at its top-left point compared to this many decimals of a metre (mm).
+CANONICAL_DECIMALS = 3
+
+#: Numeric tolerance (m) of a wall end's distance to the line it runs into (rounding only).
+ROUNDING_M = 1e-9
+
+#: Default ``slab_tolerance_m`` of :func:`find_rooms` (m): OrientParams' own default, the
+#: height band about a floor level in which a face is floor.
+SLAB_TOLERANCE_M = 0.1
 
 
 
@@ -115,6 +198,14 @@ class FloorRaster:
         out[ok] = self.grid[r[ok], c[ok]]
         return out
 
+    def segment_share(self, a: FloatArray, b: FloatArray) -> float:
+        """Share (0-1) of the segment ``a``-``b`` (x, z) that lies over set cells (sampled at a
+        fifth of a cell)."""
+        n = max(2, int(np.ceil(np.hypot(*(np.asarray(b) - np.asarray(a))) / (SEGMENT_SAMPLE_CELLS * self.cell))) + 1)
+        t = np.linspace(0.0, 1.0, n)
+        p = np.asarray(a)[None, :] + t[:, None] * (np.asarray(b) - np.asarray(a))[None, :]
+        return float(self.lookup(p[:, 0], p[:, 1]).mean())
+
     def outline(self, margin: float):
         """The floor's outer outline (holes filled) grown by ``margin``, or ``None``."""
         from scipy.ndimage import binary_fill_holes
@@ -137,7 +228,7 @@ def sample_triangles(triangles: FloatArray, spacing: float) -> FloatArray:
     if not len(tri):
         return np.zeros((0, 3))
     edge = np.max(np.linalg.norm(tri - np.roll(tri, 1, axis=1), axis=2), axis=1)
-    levels = np.clip(np.ceil(edge / spacing).astype(np.int64), 1, 64)
+    levels = np.clip(np.ceil(edge / spacing).astype(np.int64), 1, MAX_SUBDIVISIONS)
     out = []
     for k in np.unique(levels):
         t = tri[levels == k]
@@ -169,10 +260,10 @@ def floor_raster(mesh: Mesh, orientation: Orientation, story: Story, tolerance_m
     """The story's floor surface rasterized at ``cell``."""
     floor = slab_faces(mesh.face_centroids[:, 1], mesh.face_normals[:, 1], (story,), tolerance_m, ceilings=False)
     floor &= orientation.face_story == story.index
-    return _raster(sample_triangles(mesh.triangles[floor], cell * 0.7)[:, [0, 2]], cell)
+    return _raster(sample_triangles(mesh.triangles[floor], cell * FLOOR_SAMPLE_CELLS)[:, [0, 2]], cell)
 
 
-def footprint_raster(mesh: Mesh, orientation: Orientation, story: Story, floor: FloorRaster, closing_m: float) -> FloorRaster:
+def footprint_raster(mesh: Mesh, orientation: Orientation, story: Story, floor: FloorRaster, closing_m: float, fill: bool = True) -> FloorRaster:
     """Where the story stands in plan: its floor and everything standing on it (walls,
     furniture), on the floor's grid, closed over gaps up to ``closing_m`` and with its holes
     filled.
@@ -188,12 +279,12 @@ def footprint_raster(mesh: Mesh, orientation: Orientation, story: Story, floor: 
     # the vertices of faces up to two cells across cover them; larger faces are sampled
     k = max(1, int(round(closing_m / floor.cell)))
     tri = mesh.triangles[faces]
-    big = np.max(np.linalg.norm(tri - np.roll(tri, 1, axis=1), axis=2), axis=1) > 2 * floor.cell
+    big = np.max(np.linalg.norm(tri - np.roll(tri, 1, axis=1), axis=2), axis=1) > BIG_TRIANGLE_CELLS * floor.cell
     pts = np.concatenate([mesh.vertices[np.unique(mesh.faces[faces[~big]])], sample_triangles(tri[big], floor.cell)])
     grid = _raster(pts[:, [0, 2]], floor.cell, floor).grid | floor.grid
     pad = np.pad(grid, k)
     grid = binary_closing(pad, np.ones((2 * k + 1, 2 * k + 1), dtype=bool))[k:-k, k:-k]
-    return FloorRaster(floor.x0, floor.z0, floor.cell, binary_fill_holes(grid))
+    return FloorRaster(floor.x0, floor.z0, floor.cell, binary_fill_holes(grid) if fill else grid)
 
 
 def extend_walls(walls: FlatWalls, index: np.ndarray, reach_m: float) -> tuple[FloatArray, FloatArray]:
@@ -209,25 +300,27 @@ def extend_walls(walls: FlatWalls, index: np.ndarray, reach_m: float) -> tuple[F
     lo_b, hi_b = walls.u_min[index] - reach_m, walls.u_max[index] + reach_m
     for sign, ends in ((-1.0, walls.u_min[index]), (1.0, walls.u_max[index])):
         denom, s, ub = end_crossings(tan, nor, off, ends, sign)
-        ok = (np.abs(denom) >= np.sin(np.radians(MIN_MEETING_ANGLE_DEG))) & (s >= -1e-9) & (s <= reach_m) & (ub >= lo_b[None, :]) & (ub <= hi_b[None, :])
+        ok = (np.abs(denom) >= np.sin(np.radians(MIN_MEETING_ANGLE_DEG))) & (s >= -ROUNDING_M) & (s <= reach_m) & (ub >= lo_b[None, :]) & (ub <= hi_b[None, :])
         np.fill_diagonal(ok, False)
         best = np.where(ok, s, np.inf).min(axis=1)
         hit = np.isfinite(best)
         if sign < 0:
-            u_lo[hit] -= best[hit] + 1e-3
+            u_lo[hit] -= best[hit] + NODE_OVERSHOOT_M
         else:
-            u_hi[hit] += best[hit] + 1e-3
+            u_hi[hit] += best[hit] + NODE_OVERSHOOT_M
     return u_lo, u_hi
 
 
-def find_rooms(mesh: Mesh, orientation: Orientation, walls: FlatWalls, params: PlanParams | None = None, slab_tolerance_m: float = 0.1) -> tuple[Room, ...]:
+def find_rooms(
+    mesh: Mesh, orientation: Orientation, walls: FlatWalls, params: PlanParams | None = None, slab_tolerance_m: float = SLAB_TOLERANCE_M
+) -> tuple[Room, ...]:
     """Rooms of every story, labelled ``Room 1``, ``Room 2``, ... story by story, then from the
     top of the plan down and from left to right."""
     params = params or PlanParams()
     found: list[tuple[int, Polygon, str]] = []
     for story in orientation.stories:
         found.extend((story.index, poly, how) for poly, how in story_rooms(mesh, orientation, walls, story, params, slab_tolerance_m))
-    found.sort(key=lambda r: (r[0], round(r[1].centroid.y, 1), round(r[1].centroid.x, 1)))
+    found.sort(key=lambda r: (r[0], round(r[1].centroid.y, ORDER_DECIMALS), round(r[1].centroid.x, ORDER_DECIMALS)))
     return tuple(Room(s, f"Room {i + 1}", _canonical(poly), how) for i, (s, poly, how) in enumerate(found))
 
 
@@ -235,7 +328,7 @@ def _canonical(poly: Polygon) -> Polygon:
     """The same ring started at its top-left point (smallest z, then x, to the millimetre), so
     that the polygon does not depend on the order in which shapely happened to build it."""
     ring = np.asarray(poly.exterior.coords)[:-1]
-    key = np.round(ring, 3)
+    key = np.round(ring, CANONICAL_DECIMALS)
     start = int(np.lexsort((key[:, 0], key[:, 1]))[0])
     return Polygon(np.roll(ring, -start, axis=0))
 
@@ -252,11 +345,13 @@ def story_rooms(mesh: Mesh, orientation: Orientation, walls: FlatWalls, story: S
     # the walls as scanned (corners only), and closed where the scan missed a piece of them
     scanned = segments(*extend_walls(walls, index, params.corner_extension_m))
     u_lo, u_hi, bridges = close_walls(walls, index, params.corner_extension_m, params.wall_gap_m, params.collinear_wall_m)
+    footprint = footprint_raster(mesh, orientation, story, raster, params.footprint_closing_m)
+    seen = footprint_raster(mesh, orientation, story, raster, params.footprint_closing_m, fill=False)
+    outline = footprint.outline(params.floor_margin_m)
+    u_lo, u_hi = run_to_boundary(walls, index, u_lo, u_hi, outline, params.wall_gap_m, params.room_mouth_m, raster.segment_share)
     lines = segments(u_lo, u_hi) + bridges
     wall_lines = MultiLineString(lines) if lines else None
     scanned_lines = MultiLineString(scanned) if scanned else None
-    footprint = footprint_raster(mesh, orientation, story, raster, params.footprint_closing_m)
-    outline = footprint.outline(params.floor_margin_m)
     boundary = list(lines)
     if outline is not None:
         boundary.extend(p.exterior for p in shapely.get_parts(outline))
@@ -266,7 +361,7 @@ def story_rooms(mesh: Mesh, orientation: Orientation, walls: FlatWalls, story: S
     # A wall with the same face on both sides (one end free) is no edge of any face:
     # polygonize drops it. Cut every face along the walls (a 0.1 mm slit), so that two rooms
     # joined only around the free end of a wall by a strip narrower than a room come apart.
-    slits = wall_lines.buffer(1e-4, cap_style="flat", join_style="mitre") if wall_lines is not None else None
+    slits = wall_lines.buffer(SLIT_M, cap_style="flat", join_style="mitre") if wall_lines is not None else None
     tight = None
     closed: list[tuple[Polygon, str]] = []
     open_parts: list[Polygon] = []
@@ -276,19 +371,20 @@ def story_rooms(mesh: Mesh, orientation: Orientation, walls: FlatWalls, story: S
         if slits is not None:
             face = face.difference(slits)
         for part in _parts(face, params):
-            room = _classify(part, raster, wall_lines, scanned_lines, params)
+            room = _classify(part, raster, wall_lines, scanned_lines, params, seen)
             if room is None:
                 continue
             if room[1] != "floor":
                 closed.append(room)
                 continue
+            enclosed = not _floored(part, raster, params)  # walls and what was seen made it a room
             # where no wall closes it, the room ends where the story's footprint does (the
             # outline used for the arrangement lies a margin outside); what the footprint
             # splits apart is as many rooms
             if tight is None:
                 tight = footprint.outline(params.floor_closure_margin_m)
             for piece in _parts(part.intersection(tight), params):
-                if _classify(piece, raster, None, None, params) is not None:
+                if enclosed or _classify(piece, raster, None, None, params) is not None:
                     open_parts.append(Polygon(piece.exterior))
     return _open_rooms(open_parts, closed, faces, params)
 
@@ -303,21 +399,21 @@ def _open_rooms(parts: list[Polygon], closed: list[tuple[Polygon, str]], faces, 
     big = [p for p in parts if p.area >= params.min_fragment_area_m2]
     for piece in big:
         # beyond the walls around the piece: every other face of the arrangement
-        others = [f for f in faces if f.area > 0 and not f.buffer(-1e-3).intersects(piece.representative_point())]
-        beyond = shapely.union_all([f.buffer(-1e-4, join_style="mitre") for f in others] + rooms) if others or rooms else None
+        others = [f for f in faces if f.area > 0 and not f.buffer(-INSIDE_M).intersects(piece.representative_point())]
+        beyond = shapely.union_all([f.buffer(-SLIT_M, join_style="mitre") for f in others] + rooms) if others or rooms else None
         shape = straighten(piece, beyond, params.open_room_fit_m, FLOOR_FRINGE_M)
         rooms.append(shape)
         out.append((shapely.orient_polygons(shape, exterior_cw=True), "floor"))
     # a fragment joins the room it shares the most boundary with (a slit's width away)
     result = list(closed) + out
     for frag in small:
-        touch = [(k, frag.buffer(2e-3, join_style="mitre").intersection(p).area) for k, (p, _) in enumerate(result)]
+        touch = [(k, frag.buffer(TOUCH_M, join_style="mitre").intersection(p).area) for k, (p, _) in enumerate(result)]
         touch = [(k, a) for k, a in touch if a > 0]
         if not touch:
             continue
         k = max(touch, key=lambda t: t[1])[0]
         poly, how = result[k]
-        merged = shapely.union_all([poly, frag.buffer(2e-4, join_style="mitre")]).buffer(-1e-4, join_style="mitre")
+        merged = shapely.union_all([poly, frag.buffer(2 * SLIT_M, join_style="mitre")]).buffer(-SLIT_M, join_style="mitre")
         parts = [p for p in shapely.get_parts(merged) if isinstance(p, Polygon)]
         if parts:
             result[k] = (shapely.orient_polygons(Polygon(max(parts, key=lambda p: p.area).exterior), exterior_cw=True), how)
@@ -339,27 +435,51 @@ def _opening(shape, radius: float):
     # GEOS divides by zero on the collinear spikes that a shrunk ring can have; the result is
     # still right, so numpy's warning about it would only alarm the user
     with np.errstate(divide="ignore", invalid="ignore"):
-        return shape.buffer(-radius, join_style="mitre").buffer(radius, join_style="mitre", mitre_limit=2.0).intersection(shape)
+        return shape.buffer(-radius, join_style="mitre").buffer(radius, join_style="mitre", mitre_limit=OPENING_MITRE_LIMIT).intersection(shape)
 
 
-def _classify(face: Polygon, raster: FloorRaster, wall_lines, scanned_lines, params: PlanParams):
-    """``(polygon, closed_by)`` when the face is a room, else ``None``: ``closed_by`` is
-    ``"walls"`` when scanned walls bound it, ``"extension"`` when walls continued across what
-    the scan missed (:func:`close_walls`) do, else ``"floor"``."""
+def _cover(face: Polygon, raster: FloorRaster) -> float:
+    """Share (0-1) of ``face`` whose cells are set in ``raster``, sampled every
+    :data:`COVER_SAMPLE_M`."""
     xmin, zmin, xmax, zmax = face.bounds
-    mx, mz = np.meshgrid(np.arange(xmin, xmax, 0.1) + 0.05, np.arange(zmin, zmax, 0.1) + 0.05)
+    mx, mz = np.meshgrid(np.arange(xmin, xmax, COVER_SAMPLE_M) + COVER_SAMPLE_M / 2, np.arange(zmin, zmax, COVER_SAMPLE_M) + COVER_SAMPLE_M / 2)
     gx, gz = mx.ravel(), mz.ravel()
     inside = shapely.contains_xy(face, gx, gz)
-    if inside.sum() == 0 or raster.lookup(gx[inside], gz[inside]).mean() < params.min_floor_fraction:
-        return None
+    if inside.sum() == 0:
+        return 0.0
+    return float(raster.lookup(gx[inside], gz[inside]).mean())
+
+
+def _floored(face: Polygon, raster: FloorRaster, params: PlanParams) -> bool:
+    """Whether floor was scanned under at least ``min_floor_fraction`` of ``face``."""
+    return _cover(face, raster) >= params.min_floor_fraction
+
+
+def _off_walls(face: Polygon, lines) -> float:
+    """Share (0-1) of ``face``'s outline farther than :data:`ON_WALL_M` from ``lines``."""
+    ring = face.exterior
+    d = np.linspace(0, ring.length, max(MIN_RING_SAMPLES, int(ring.length / RING_SAMPLE_M)), endpoint=False)
+    pts = shapely.line_interpolate_point(ring, d)
+    return float(np.mean(shapely.distance(pts, lines) > ON_WALL_M))
+
+
+def _classify(face: Polygon, raster: FloorRaster, wall_lines, scanned_lines, params: PlanParams, seen: FloorRaster | None = None):
+    """``(polygon, closed_by)`` when the face is a room, else ``None``: ``closed_by`` is
+    ``"walls"`` when scanned walls bound it, ``"extension"`` when walls continued across what
+    the scan missed (:func:`close_walls`) do, else ``"floor"``.
+
+    A face is a room when floor was scanned under enough of it (``min_floor_fraction``), or,
+    where it was not (a stair, a corridor whose floor the sensor missed), when walls bound it on
+    :data:`ENCLOSED_WALL_SHARE` of its outline and the sensor saw something of the story in
+    :data:`ENCLOSED_SEEN_FRACTION` of it (``seen``)."""
+    off = _off_walls(face, wall_lines) if wall_lines is not None else 1.0
+    if not _floored(face, raster, params):
+        if seen is None or 1.0 - off < ENCLOSED_WALL_SHARE or _cover(face, seen) < ENCLOSED_SEEN_FRACTION:
+            return None
     closed_by = "floor"
-    if wall_lines is not None:
-        ring = face.exterior
-        d = np.linspace(0, ring.length, max(8, int(ring.length / 0.1)), endpoint=False)
-        pts = shapely.line_interpolate_point(ring, d)
-        if np.mean(shapely.distance(pts, wall_lines) > 0.02) <= 0.05:
-            closed_by = "extension"
-            if scanned_lines is not None and np.mean(shapely.distance(pts, scanned_lines) > 0.02) <= 0.05:
-                closed_by = "walls"
-    poly = shapely.orient_polygons(Polygon(shapely.simplify(face, 0.005).exterior), exterior_cw=True)
+    if wall_lines is not None and off <= OFF_WALL_SHARE:
+        closed_by = "extension"
+        if scanned_lines is not None and _off_walls(face, scanned_lines) <= OFF_WALL_SHARE:
+            closed_by = "walls"
+    poly = shapely.orient_polygons(Polygon(shapely.simplify(face, SIMPLIFY_M).exterior), exterior_cw=True)
     return poly, closed_by

@@ -9,9 +9,15 @@ the ceiling. A wall is a vertical surface that bounds a space, so each segment i
 
 * its top reaches what is above it: the ceiling where the story has one, else the top of what
   was scanned in front of and behind it (a wall whose top is lost in unscanned space reaches;
-  a counter front with the wall behind it scanned higher does not);
-* it rises above the highest work surface (``max_work_surface_m``) and is seen over at least
-  :data:`MIN_COLUMN_SPAN_SHARE` of that height (not a beam, a lintel or a shelf board alone);
+  a counter front with the wall behind it scanned higher does not); a column at the edge of
+  the scan, with nothing scanned behind it, reaches when it rises above door height
+  (:data:`EDGE_WALL_MIN_TOP_M`): its top is lost in the band under the ceiling that headsets
+  miss;
+* it rises above the highest work surface (``max_work_surface_m``), or, at the edge of the
+  scan with no top attached and nothing flush behind it, above :data:`EDGE_WALL_MIN_SEEN_M`
+  (the scan ended below the work-surface height);
+* it is seen over at least :data:`MIN_COLUMN_SPAN_SHARE` of the height it must rise to (not a
+  beam, a lintel or a shelf board alone);
 * nothing horizontal is attached to its top edge behind it (the top of a counter, a desk, a
   bed, a sideboard: a front's top surface lies right behind its upper edge, on the side its
   normal points away from);
@@ -71,6 +77,20 @@ MIN_COLUMN_SPAN_SHARE = 0.5
 #: strip of the wall behind a counter (its backsplash) or a cupboard, not a skirting board or a
 #: window sill.
 MIN_BEHIND_SPAN_M = 0.3
+
+#: A column at the edge of the scan (nothing scanned behind it) whose top is at least this high
+#: above the floor (m) reaches: its top is lost in the unscanned band under the ceiling, which
+#: headsets often miss on walls (their rays graze it). Door heads (2.0-2.1 m) and furniture
+#: (rarely above 2 m, see ``WallParams.ceiling_reach_m``) stay below it; a wardrobe or a screen
+#: this tall has the wall or the ceiling scanned behind it.
+EDGE_WALL_MIN_TOP_M = 2.1
+
+#: A column at the edge of the scan with no horizontal top attached behind its upper edge and no
+#: surface flush behind it rises above the work surfaces when its top is this high above the
+#: floor (m): where nothing was scanned beyond it, a top below ``max_work_surface_m`` is where
+#: the scan ended (stories scanned to 1.2-1.8 m), while the fronts that low (sofa and seat
+#: backs, beds, sideboards: 0.4-0.9 m) either show their top or stand against a wall.
+EDGE_WALL_MIN_SEEN_M = 1.0
 
 #: Faces are split until no edge is longer than this share of the DBSCAN box length: DBSCAN
 #: counts triangle centroids, which stand for the scanned surface only when triangles are
@@ -307,6 +327,17 @@ def local_top(raster: StoryRaster, normal: FloatArray, cols: Columns, width_m: f
     front = np.arange(step, context_m + 1e-9, step)
     behind = -np.arange(thickness_m + step, context_m + 1e-9, step)
     return _region(raster, raster.top, normal, cols, width_m, np.r_[front, behind], -np.inf).max(axis=1)
+
+
+def behind_top(raster: StoryRaster, normal: FloatArray, cols: Columns, width_m: float, context_m: float, thickness_m: float) -> FloatArray:
+    """Top of what was scanned behind each column, beyond the wall's thickness and within
+    ``context_m`` (m; ``-inf`` where nothing was): the wall behind a front, the ceiling running
+    on over a screen, or nothing at the edge of the scan."""
+    step = RASTER_M / 2
+    behind = -np.arange(thickness_m + step, context_m + 1e-9, step)
+    if not len(behind):
+        return np.full(len(cols), -np.inf)
+    return _region(raster, raster.top, normal, cols, width_m, behind, -np.inf).max(axis=1)
 
 
 def top_attached(raster: StoryRaster, normal: FloatArray, cols: Columns, width_m: float) -> FloatArray:

@@ -34,12 +34,15 @@ from ..geometry import FloatArray, IntArray, Mesh
 from ..orient import Orientation
 from .boxdbscan import box_dbscan
 from .evidence import (
+    EDGE_WALL_MIN_SEEN_M,
+    EDGE_WALL_MIN_TOP_M,
     FLOOR_CLEARANCE_M,
     MIN_COLUMN_SPAN_SHARE,
     MIN_TOP_SHARE,
     SPLIT_SHARE,
     Columns,
     StoryRaster,
+    behind_top,
     columns,
     floor_behind,
     group_weighted_median,
@@ -613,7 +616,7 @@ def find_flat_walls(mesh: Mesh, orientation: Orientation, params: WallParams | N
             offset = group_weighted_median(lab, across_c, areas[fidx], k, across_order)
             u_lo, u_hi = _group_minmax(np.repeat(lab, 3), vu.reshape(-1), k)
             cols = columns(lab, pts[ok, 0], vu, verts[..., 1], across_c, areas[fidx], width, across_order)
-            wall, neutral = _wall_columns(cols, raster, d, story.floor, ceiling, width, params)
+            wall, neutral, edge = _wall_columns(cols, raster, d, story.floor, ceiling, width, params)
             wall |= _continues(below, d_index, d, offset, u_lo, u_hi, params)[cols.segment]
             run = runs(cols, wall, neutral)
             n_runs = int(run.max()) + 1
@@ -622,7 +625,11 @@ def find_flat_walls(mesh: Mesh, orientation: Orientation, params: WallParams | N
             r_ok = run_face >= 0
             r_lo, r_hi = _group_minmax(np.repeat(run_face[r_ok], 3), vu[r_ok].reshape(-1), max(n_runs, 1))
             r_bottom, _ = _group_minmax(np.repeat(run_face[r_ok], 3), verts[r_ok][..., 1].reshape(-1), max(n_runs, 1))
-            keep_run = (r_hi - r_lo >= params.min_wall_length_m) & (r_bottom <= story.floor + params.floor_reach_m)
+            # a run at the edge of the scan (nothing behind any of its wall columns) may have its
+            # foot hidden by what stands against it: seen over half the height is enough there
+            r_edge = np.ones(max(n_runs, 1), dtype=bool)
+            np.logical_and.at(r_edge, run[wall & (run >= 0)], edge[wall & (run >= 0)])
+            keep_run = (r_hi - r_lo >= params.min_wall_length_m) & ((r_bottom <= story.floor + params.floor_reach_m) | r_edge[: max(n_runs, 1)])
             piece_of_col, piece_normals = _pieces(cols, run, keep_run, d, params)
             n_pieces = len(piece_normals)
             # sub-segments: each straight piece of a kept run, then the other runs, then the
@@ -710,9 +717,10 @@ def find_flat_walls(mesh: Mesh, orientation: Orientation, params: WallParams | N
 
 def _wall_columns(
     cols: Columns, raster: StoryRaster, normal: FloatArray, floor: float, ceiling: float | None, width: float, params: WallParams
-) -> tuple[np.ndarray, np.ndarray]:
-    """Which columns show the evidence of a wall, and which are neutral (see
-    :mod:`meshplan.walls.evidence`).
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Which columns show the evidence of a wall, which are neutral (see
+    :mod:`meshplan.walls.evidence`), and which stand at the edge of the scan (nothing scanned
+    behind them within ``context_m``).
 
     The top a column must reach is the highest thing scanned in front of it or behind it (the
     ceiling near it, capped at the story's ceiling, or the top of the scan where there is no
@@ -725,9 +733,17 @@ def _wall_columns(
     if ceiling is not None:
         target = np.minimum(target, ceiling)
     reaches = top >= target - params.ceiling_reach_m
+    # at the edge of the scan a wall's top may be lost under the ceiling (EDGE_WALL_MIN_TOP_M)
+    edge = np.isneginf(behind_top(raster, normal, cols, width, params.context_m, params.max_wall_thickness_m))
+    reaches |= edge & (top >= floor + EDGE_WALL_MIN_TOP_M)
     above_work = top > floor + params.max_work_surface_m
     seen = cols.top - cols.bottom >= MIN_COLUMN_SPAN_SHARE * (target - floor)
     furniture_top = top_attached(raster, normal, cols, width) >= MIN_TOP_SHARE
     hidden = hidden_behind(cols, params.context_m, params.max_wall_thickness_m, params.max_work_surface_m)
+    # at the edge of the scan, with no top attached and nothing flush behind it (a thin box
+    # against a wall), a column seen above seat backs is a wall whose top the scan did not
+    # reach (a story scanned to 1.2-1.8 m): EDGE_WALL_MIN_SEEN_M
+    flush = hidden_behind(cols, params.context_m, params.box_depth_m, params.max_work_surface_m)
+    above_work |= edge & ~furniture_top & ~flush & (top > floor + EDGE_WALL_MIN_SEEN_M)
     plausible = reaches & above_work & ~furniture_top & ~hidden
-    return plausible & seen, plausible & ~seen
+    return plausible & seen, plausible & ~seen, edge
