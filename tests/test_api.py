@@ -33,6 +33,7 @@ def test_readme_starts_with_the_two_commands_and_documents_the_api_and_batch():
         assert words in text, words
 
 
+@pytest.mark.slow
 def test_readme_example_runs(tmp_path, monkeypatch):
     (block,) = [b for b in _python_blocks(README.read_text(encoding="utf-8")) if "meshplan.run(" in b]
     # the scan the example names ('meshplan synth --preset room --seed 1 -o room'), coarser to be quick

@@ -198,6 +198,7 @@ def test_envelope_orientations_follow_north(computed):
     assert sum(f["wall_area"] for f in base["facades"]) == pytest.approx(base["total"]["wall_area"], abs=1e-3)
 
 
+@pytest.mark.slow
 def test_gbxml_is_deterministic_on_a_300k_face_apartment():
     """Byte-identical twice on a large scan (its speed, under 0.2 s, is checked by make bench)."""
     from meshplan.io import LoadStats
@@ -221,6 +222,7 @@ def _write_room(tmp_path):
     return write_synthetic(generate(SynthParams(preset="room", seed=1, triangle_size_m=(0.12, 0.2))), tmp_path / "room")
 
 
+@pytest.mark.slow
 def test_run_writes_gbxml_idf_osm_and_the_envelope(tmp_path):
     import jsonschema
 
@@ -249,6 +251,7 @@ def test_run_writes_gbxml_idf_osm_and_the_envelope(tmp_path):
     assert gb.find(".//g:Location/g:CADModelAzimuth", NS).text.startswith("30.")
 
 
+@pytest.mark.slow
 def test_cli_json_summary_has_the_envelope(tmp_path):
     from meshplan.cli import main
 

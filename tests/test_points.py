@@ -161,6 +161,7 @@ def test_every_reader_gives_the_same_points_colours_and_intensities(tmp_path):
             assert np.allclose(cloud.intensity[order], intensity[ref], atol=1e-6)
 
 
+@pytest.mark.slow
 def test_a_ply_with_points_and_no_faces_is_read_as_a_cloud(tmp_path, apartment):
     p, colors, _ = sample_cloud(apartment.mesh, *PHONE)
     write_ply(tmp_path / "cloud.ply", p, colors)
@@ -180,6 +181,7 @@ def test_too_few_points_are_refused(tmp_path):
         load_mesh(path)
 
 
+@pytest.mark.slow
 def test_voxel_size_and_max_faces(tmp_path, apartment):
     p, _, _ = sample_cloud(apartment.mesh, 2000.0, 0.002)
     write_ply(tmp_path / "dense.ply", p)
@@ -215,6 +217,7 @@ def test_batch_finds_point_clouds_and_usd(tmp_path):
 # the pipeline on clouds, against the truth
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("fmt", ["e57", "las", "ply"])
 def test_phone_cloud_of_the_apartment(tmp_path, apartment, fmt):
     p, colors, intensity = sample_cloud(apartment.mesh, *PHONE)
@@ -225,6 +228,7 @@ def test_phone_cloud_of_the_apartment(tmp_path, apartment, fmt):
     _check(result, apartment.truth)
 
 
+@pytest.mark.slow
 def test_laser_cloud_of_a_room(tmp_path):
     """10,000 points/m2 (a room, to keep the test fast: 0.8 million points) subsampled to the
     3 cm grid."""
@@ -237,6 +241,7 @@ def test_laser_cloud_of_a_room(tmp_path):
     _check(result, scan.truth)
 
 
+@pytest.mark.slow
 def test_pen_and_ink_plan_of_a_cloud_is_the_slices_of_its_splats(tmp_path, apartment):
     p, _, _ = sample_cloud(apartment.mesh, *PHONE)
     write_ply(tmp_path / "apartment.ply", p)
@@ -311,6 +316,7 @@ def room_z_up():
     return points, truth
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     "crs, horizontal_m, vertical_m, named",
     [
@@ -336,6 +342,7 @@ def test_las_units_come_from_its_crs(tmp_path, room_z_up, crs, horizontal_m, ver
     assert doc["input"]["scale_to_m"] == pytest.approx(horizontal_m, rel=1e-10) and doc["input"]["units"] == named
 
 
+@pytest.mark.slow
 def test_units_given_override_the_las_crs(tmp_path, room_z_up, caplog):
     points, _ = room_z_up
     path = tmp_path / "room.las"
@@ -350,6 +357,7 @@ def test_units_given_override_the_las_crs(tmp_path, room_z_up, caplog):
     assert feet.stats.units == "ft" and np.allclose(np.ptp(feet.mesh.vertices, axis=0), 100.0 * US_FOOT_M * np.ptp(points, axis=0), rtol=0.01)
 
 
+@pytest.mark.slow
 def test_a_las_without_crs_or_with_degrees_is_read_in_units(tmp_path, room_z_up):
     points, _ = room_z_up
     write_las(tmp_path / "plain.las", points)
@@ -361,6 +369,7 @@ def test_a_las_without_crs_or_with_degrees_is_read_in_units(tmp_path, room_z_up)
     assert stats.units == "ft" and stats.scale_to_m == pytest.approx(0.3048)
 
 
+@pytest.mark.slow
 def test_plan_json_says_how_a_cloud_was_subsampled(tmp_path, room_z_up):
     import jsonschema
 

@@ -63,6 +63,7 @@ def test_transforms_units_and_up_axis(tmp_path):
     assert np.allclose(loaded.mesh.bounds()[1], [5.01, 1.0, 0.01], atol=1e-6)  # centimetres read as metres
 
 
+@pytest.mark.slow
 def test_synthetic_apartment_as_a_z_up_usd_in_centimetres(tmp_path):
     scan = generate(SynthParams(preset="apartment", seed=1))
     # the scan's y-up metres written as a z-up stage in centimetres: read back, it is the scan
@@ -222,6 +223,7 @@ def write_roomplan(path, *, meters_per_unit, up):
     }
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("meters_per_unit, up", [(1.0, "Y"), (0.01, "Z")])
 def test_roomplan_like_stage_in_any_units_and_up_axis(tmp_path, meters_per_unit, up):
     path = tmp_path / "room.usda"
