@@ -61,12 +61,14 @@ def real_openings():
 
 
 @pytest.mark.realscan
-@pytest.mark.parametrize("name", sorted(REAL_DOORS))
-def test_real_doors(real_openings, name):
+@pytest.mark.parametrize(
+    "key, name", [("doors", n) for n in sorted(REAL_DOORS)] + [("windows", n) for n in sorted(REAL_WINDOWS)]
+)
+def test_real_openings(real_openings, key, name):
     if name not in real_openings:
         pytest.skip(f"{name} not available")
-    sure_min, extra_max = REAL_DOORS[name]
-    d = real_openings[name]["doors"]
+    sure_min, extra_max = (REAL_DOORS if key == "doors" else REAL_WINDOWS)[name]
+    d = real_openings[name][key]
     assert d["matched_sure"] >= sure_min, d
     assert d["found"] - d["matched"] <= extra_max, d
 
@@ -80,13 +82,3 @@ def test_real_doors_pooled(real_openings):
     assert matched >= 0.9 * sure - 1e-9
     assert extra == 0
 
-
-@pytest.mark.realscan
-@pytest.mark.parametrize("name", sorted(REAL_WINDOWS))
-def test_real_windows(real_openings, name):
-    if name not in real_openings:
-        pytest.skip(f"{name} not available")
-    sure_min, extra_max = REAL_WINDOWS[name]
-    w = real_openings[name]["windows"]
-    assert w["matched_sure"] >= sure_min, w
-    assert w["found"] - w["matched"] <= extra_max, w
