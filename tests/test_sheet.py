@@ -17,7 +17,7 @@ from meshplan.render.sheet import format_feet_inches
 
 PRESETS = ("room", "apartment", "office", "multistory")
 REAL = ("hl2_su_office_chroje.ply", "hl2_su_apartment_two_story.ply", "hl1_mrtk_example_office.ply", "hl1_htk_fake_spatial_mapping_room_corner.ply")
-LABELS = ("room-label", "dimension", "annotation-label")
+LABELS = ("room-label", "dimension", "annotation-label", "stair-label")
 
 
 def _figures(result, **kw):
@@ -30,7 +30,7 @@ def _figures(result, **kw):
     for sp in result.stories:
         i = sp.story.index
         sheet = make_sheet(result.mesh.face_centroids[o.face_story == i][:, [0, 2]], params)
-        symbols = plan_symbols(i, result.walls, result.openings, result.rooms, result.physical_walls, params.imperial)
+        symbols = plan_symbols(i, result.walls, result.openings, result.rooms, result.physical_walls, params.imperial, stairs=result.stairs)
         yield symbols, drafting_figure(sp.drafting, sp.annotations, sheet, params, len(result.stories), symbols, scan="scan.ply")
 
 
@@ -222,3 +222,89 @@ def test_dxf_walls_are_hatched(computed):
     doc = ezdxf.read(io.StringIO(data.decode()))
     hatches = [e for e in doc.modelspace() if e.dxftype() == "HATCH" and e.dxf.layer == "WALLS"]
     assert len(hatches) >= len([w for w in result.physical_walls if w.story == 0])
+
+
+# --- standard sheet sizes (--sheet) ------------------------------------------------------------
+
+
+def _square(side_m: float) -> np.ndarray:
+    g = np.linspace(0.0, side_m, 40)
+    return np.stack(np.meshgrid(g, g), -1).reshape(-1, 2)
+
+
+def test_fit_is_the_default_and_unchanged():
+    from meshplan.render.params import RenderParams
+    from meshplan.render.sheet import new_figure
+
+    params = RenderParams()
+    assert params.sheet == "fit"
+    sheet = make_sheet(_square(10.0), params)
+    assert sheet.page_in is None and sheet.paper == ""
+    fig, _ = new_figure(sheet, "t", params)
+    w, h = sheet.drawing_in
+    assert tuple(fig.get_size_inches()) == pytest.approx((max(w + 1.1, 10.5), h + 2.35))
+
+
+@pytest.mark.parametrize(("side", "scale", "imperial"), [(10.0, 100, False), (10.0, 50, False), (30.0, 100, False), (10.0, 50, True), (4.0, 50, True)])
+def test_auto_sheet_is_the_smallest_that_holds_the_plan(side, scale, imperial):
+    from meshplan.render.params import AUTO_PAPER_IMPERIAL, AUTO_PAPER_METRIC, PAPER_SIZES_IN, RenderParams
+    from meshplan.render.sheet import _fits, _orientations, new_figure
+
+    params = RenderParams(sheet="auto", scale=scale, imperial=imperial)
+    sheet = make_sheet(_square(side), params)
+    names = AUTO_PAPER_IMPERIAL if imperial else AUTO_PAPER_METRIC
+    assert sheet.paper in names and sheet.scale == scale
+    assert sorted(sheet.page_in) == pytest.approx(sorted(PAPER_SIZES_IN[sheet.paper]))
+    extent = np.array([sheet.width_m, sheet.depth_m]) - 2 * 0.026 * scale
+    for smaller in names[: names.index(sheet.paper)]:
+        assert not any(_fits(extent, scale, page) for page in _orientations(smaller))
+    fig, ax = new_figure(sheet, "t", params)
+    assert tuple(fig.get_size_inches()) == pytest.approx(sheet.page_in)
+    x0, y0, x1, y1 = ax.get_position().extents
+    assert 0 < x0 < x1 < 1 and 0 < y0 < y1 < 1  # the drawing on the paper
+    # exactly at the scale: the axes are the drawing's size on paper
+    assert (x1 - x0) * sheet.page_in[0] == pytest.approx(sheet.drawing_in[0])
+
+
+def test_named_sheet_picks_a_scale_that_fits_or_refuses():
+    from meshplan.errors import ParameterError
+    from meshplan.render.params import RenderParams
+
+    auto = make_sheet(_square(10.0), RenderParams())
+    a4 = make_sheet(_square(10.0), RenderParams(sheet="A4"))
+    a0 = make_sheet(_square(10.0), RenderParams(sheet="A0"))
+    assert a4.paper == "A4" and a4.scale > auto.scale  # a smaller standard scale to fit A4
+    assert a0.scale == auto.scale and a0.page_in == pytest.approx((1189 / 25.4, 841 / 25.4))  # landscape
+    with pytest.raises(ParameterError, match="does not fit on A4 at 1:20"):
+        make_sheet(_square(10.0), RenderParams(sheet="A4", scale=20))
+    with pytest.raises(ParameterError, match="one of fit, auto, A4"):
+        RenderParams(sheet="A5")
+
+
+# --- short dimension pieces and bare numbers (hl2_su_apartment_two_story story 0) ---------------
+
+
+def test_ticks_closer_than_the_paper_gap_merge():
+    from meshplan.render.plans import merge_ticks
+
+    t = [1.626, 1.793, 3.53, 3.605, 3.68, 12.424, 12.511]
+    assert merge_ticks(t, 0.1).tolist() == [1.626, 1.793, 3.605, 12.511]  # the ends stay
+    assert merge_ticks(t, 0.1, prefer=[3.68]).tolist() == [1.626, 1.793, 3.68, 12.511]  # the coarser chain's
+    assert merge_ticks(t, 0.01).tolist() == t
+
+
+@pytest.mark.slow
+def test_real_apartment_has_no_short_dimension_pieces_nor_bare_numbers(real_results):
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    from meshplan.render.plans import DIM_TICK_MERGE_MM
+
+    result = real_results("hl2_su_apartment_two_story.ply")
+    for _symbols, fig in _figures(result):
+        FigureCanvasAgg(fig).draw()
+        ax = fig.axes[0]
+        scale = int(next(t.get_text() for a in fig.axes for t in a.texts if t.get_text().startswith("SCALE 1:"))[8:])
+        dims = [float(t.get_text()) for t in ax.texts if getattr(t, "meshplan_role", None) == "dimension"]
+        assert dims and min(dims) >= DIM_TICK_MERGE_MM * scale / 1000 - 0.005, sorted(dims)[:5]
+        rooms = [t.get_text() for t in ax.texts if getattr(t, "meshplan_role", None) == "room-label"]
+        assert not any(t.replace(".", "").isdigit() for t in rooms), rooms  # "0.02" reads as a length

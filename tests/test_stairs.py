@@ -33,6 +33,7 @@ def _truth_frame(stories: int, seed: int):
     return s.truth, find_stairs(s.truth_mesh(), _stories(s.truth))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("stories", [2, 3])
 @pytest.mark.parametrize("seed", [1, 2, 3])
 def test_every_multistory_stair_found(stories, seed):
@@ -59,6 +60,7 @@ def test_every_multistory_stair_found(stories, seed):
         assert s.void is not None and s.void.intersection(poly).area >= 0.8 * poly.area
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("preset", "seed"), [("apartment", 1), ("apartment", 2), ("apartment", 3), ("office", 1), ("office", 2)])
 def test_no_stairs_in_furniture(preset, seed):
     s = generate(preset=preset, seed=seed)
@@ -151,6 +153,7 @@ def test_pipeline_plan_json_ifc_and_evaluate(computed, tmp_path):
     assert stair.ContainedInStructure[0].RelatingStructure.Name == "Story 0"
 
 
+@pytest.mark.slow
 def test_real_two_story_apartment_stair():
     import meshplan
 
@@ -161,3 +164,135 @@ def test_real_two_story_apartment_stair():
     assert len(s.treads) >= 5 and RISE_M[0] <= s.rise <= RISE_M[1]
     story = result.orientation.stories
     assert s.risers == round((story[1].floor - story[0].floor) / s.rise)
+
+
+# --- drawing the stairs (issue 12 / 16: the symbol on both stories, DXF, IFC footprint) --------
+
+
+def test_stair_symbol_of_a_straight_stair():
+    """A straight flight of 14 treads, cut at 1.2 m: the risers below the cut solid and those
+    above dashed on either side of the break line, the walking line from the first riser to the
+    last with the arrow along the ascent; on the upper story every riser seen, no cut, the void."""
+    from meshplan.plan.symbols import stair_symbols
+
+    rise, going, width = 0.18, 0.27, 0.9
+    straight = [(k * going, (k + 1) * going, 0.0, width, (k + 1) * rise) for k in range(14)]
+    (s,) = find_stairs(_treads_mesh(straight), STORIES)
+    (low,) = stair_symbols(0, (s,))
+    assert low.role == "lower" and len(low.void) == 0
+    # the cut meets the walking line between the 6th tread (1.08 m) and the 7th (1.26 m)
+    cut_x = (5.5 + 0.12 / 0.18) * going
+    slant = 0.35 * width / 2 + 0.06
+    xs = lambda segs: np.asarray(segs)[:, :, 0]  # noqa: E731
+    assert len(low.lines) and len(low.hidden)
+    assert xs(low.lines).min() == pytest.approx(0.0, abs=0.02)  # the first riser
+    assert np.all(xs(low.hidden) >= cut_x - slant - 1e-6)
+    assert np.all(xs(low.lines) <= cut_x + slant + 1e-6)
+    assert np.ptp(low.cut[:, 0]) > 0.1 and np.ptp(low.cut[:, 1]) >= width  # across the flight, slanted
+    assert np.allclose(low.arrow, (1.0, 0.0), atol=0.02)
+    assert low.walk[0][0] == pytest.approx(0.0, abs=0.02) and low.walk_hidden[-1][0] == pytest.approx(14 * going, abs=0.03)
+    assert low.walk[-1][0] == pytest.approx(low.walk_hidden[0][0], abs=1e-6)  # one line, split at the cut
+    assert "15 R 0.18 / 0.27" == low.text
+    (up,) = stair_symbols(1, (s,))
+    assert up.role == "upper" and len(up.hidden) == 0 and len(up.cut) == 0
+    risers = [seg for seg in up.lines if abs(seg[0][0] - seg[1][0]) < 1e-6]
+    assert len(risers) == 15  # 14 treads between 15 risers, all seen from above
+    assert stair_symbols(2, (s,)) == ()
+
+
+@pytest.mark.slow
+def test_stairs_drawn_on_both_stories_and_exported(computed, tmp_path):
+    """The multistory preset: the stair's symbol on the drafting sheets of both stories it
+    connects (with its legend entries), on the DXF's STAIRS layer, and the IfcStair with its
+    footprint, the IFC valid."""
+    import io
+
+    import ezdxf
+
+    from meshplan.export.dxf import drafting_dxf
+    from meshplan.plan.symbols import plan_symbols
+    from meshplan.render import drafting_figure, make_sheet
+
+    _, result = computed("multistory", 1)
+    (stair,) = result.stairs
+    for story, role in ((0, "lower"), (1, "upper")):
+        sp = result.stories[story]
+        symbols = plan_symbols(story, result.walls, result.openings, result.rooms, result.physical_walls, stairs=result.stairs)
+        (sym,) = symbols.stairs
+        assert sym.role == role
+        if role == "lower":
+            assert len(sym.cut) and len(sym.hidden) and len(sym.void) == 0
+        else:
+            assert len(sym.void) and len(sym.cross) == 2 and len(sym.hidden) == 0
+            assert _polygon(sym.void).area == pytest.approx(stair.void.area, rel=1e-6)
+        # every line of the symbol lies on the stair's footprint
+        pts = np.concatenate([sym.lines.reshape(-1, 2), sym.walk])
+        assert stair.footprint.buffer(0.1).contains(_points(pts)).all()
+        m = result.mesh
+        sheet = make_sheet(m.face_centroids[result.orientation.face_story == story][:, [0, 2]], result.options.render)
+        fig = drafting_figure(sp.drafting, sp.annotations, sheet, result.options.render, 2, symbols)
+        names = [t.get_text() for leg in fig.legends for t in leg.get_texts()]
+        assert "stair: walking line, arrow up" in names
+        assert ("stair above the cut" in names) == (role == "lower")
+        assert ("void in the floor (over a stair)" in names) == (role == "upper")
+        rooms = [r for r in result.rooms if r.story == story]
+        doc = ezdxf.read(io.StringIO(drafting_dxf(sp.drafting.slices.segments, sp.reference, sp.annotations, "", symbols, rooms).decode()))
+        on = doc.modelspace().query('*[layer=="STAIRS"]')
+        assert len(on.query("LINE")) == len(sym.lines) + len(sym.hidden) + len(sym.cross)
+        assert len(on.query("HATCH")) == 1  # the arrow head
+        dashed = [e for e in on if e.dxf.get("linetype") in ("DASHED", "DASHDOT")]
+        assert len(dashed) == (len(sym.hidden) + 1 if role == "lower" else 1)  # hidden treads and walking line / the void
+    pytest.importorskip("ifcopenshell")
+    import ifcopenshell
+    import ifcopenshell.validate
+
+    from meshplan.export.ifc import ifc_bytes
+
+    path = tmp_path / "model.ifc"
+    path.write_bytes(ifc_bytes(result))
+    model = ifcopenshell.open(str(path))
+    (ifc_stair,) = model.by_type("IfcStair")
+    (rep,) = ifc_stair.Representation.Representations
+    assert (rep.RepresentationIdentifier, rep.RepresentationType) == ("FootPrint", "Curve2D")
+    ring = np.array([p.Coordinates for p in rep.Items[0].Points])
+    assert abs(_polygon(np.c_[ring[:, 0], -ring[:, 1]]).area - stair.footprint.area) < 0.01
+    assert ifc_stair.ContainedInStructure[0].RelatingStructure.Name == "Story 0"
+    logger = ifcopenshell.validate.json_logger()
+    ifcopenshell.validate.validate(model, logger)
+    assert logger.statements == []
+
+
+@pytest.mark.slow
+def test_stacked_stairs_middle_story(computed):
+    """Three stories: on the middle one the stair arriving from below and the one starting up
+    are both drawn; the arriving one is hidden under the visible part of the starting one, whose
+    part above the cut is left out; the void there is outlined, not crossed."""
+    from meshplan.plan.symbols import plan_symbols
+
+    _, result = computed("multistory", 2, stories=3)
+    assert len(result.stairs) == 2
+    sym = plan_symbols(1, result.walls, result.openings, result.rooms, result.physical_walls, stairs=result.stairs)
+    roles = {s.role: s for s in sym.stairs}
+    assert set(roles) == {"lower", "upper"}
+    low, up = roles["lower"], roles["upper"]
+    assert len(low.cut) and len(low.hidden) == 0 and len(low.walk_hidden) == 0
+    assert len(up.void) and len(up.cross) == 0
+    # nothing of the arriving stair is drawn over the starting one's treads below the cut
+    import shapely
+
+    below = shapely.MultiLineString([seg.tolist() for seg in low.lines]).convex_hull.buffer(-0.05)
+    mids = _points(np.asarray(up.lines).mean(axis=1))
+    assert below.area > 0.5 and not shapely.contains(below, mids).any()
+    assert len(up.lines) > 10  # the rest of it is drawn
+
+
+def _polygon(ring):
+    from shapely.geometry import Polygon
+
+    return Polygon(ring)
+
+
+def _points(pts):
+    import shapely
+
+    return shapely.points(np.asarray(pts))

@@ -1,9 +1,10 @@
 """The drawing workers (:class:`meshplan.export.RenderPool`) die with the run that forked them,
 however it dies, and Ctrl-C ends a run with one line and no traceback.
 
-Each test starts a real ``python -m meshplan run`` on a synthetic apartment (about 200,000 faces,
-several seconds to run on a busy machine), waits for its drawing workers, signals the run and
-looks at the workers through ``/proc``.
+Each of those tests starts a real ``python -m meshplan run`` on a synthetic apartment (about
+200,000 faces, several seconds to run on a busy machine), waits for its drawing workers, signals
+the run and looks at the workers through ``/proc``. The last one checks that the workers make
+the same files as the run alone.
 """
 
 from __future__ import annotations
@@ -163,3 +164,22 @@ def test_ctrl_c_is_one_line(apartment, tmp_path):
     assert len(lines) == 1 and lines[0].startswith("error: "), text
     assert not survivors, f"workers {survivors} outlived the interrupted run"
     assert not out.exists()
+
+
+def test_workers_make_the_same_files_as_the_run_alone(apartment):
+    """The drawings, GLB models, DXF files and the report come out the same, byte for byte,
+    whether the workers make them (arguments pickled, the scan sent as its vertices and faces)
+    or the run itself does."""
+    import meshplan
+    from meshplan.export import RenderPool, render_files
+
+    result = meshplan.run(apartment)
+    with RenderPool(1) as alone:
+        assert alone.executor is None
+        here = render_files(result, pool=alone)
+    with RenderPool(2) as pool:
+        there = render_files(result, pool=pool)
+    assert sorted(here) == sorted(there)
+    assert {"oriented.glb", "story-0.glb", "flat-walls-0.glb", "drafting-0.dxf", "pen-and-ink-0.svg", "report.html"} <= set(here)
+    for name in here:
+        assert here[name] == there[name], name

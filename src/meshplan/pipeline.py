@@ -152,7 +152,7 @@ def compute(
                     pen_and_ink=pen_and_ink(plan_mesh, orientation, story, options.plan, options.orient.slab_tolerance_m),
                     drafting=cut,
                     annotations=story_ann,
-                    symbols=plan_symbols(story.index, walls, openings, rooms, physical, options.render.imperial),
+                    symbols=plan_symbols(story.index, walls, openings, rooms, physical, options.render.imperial, stairs=stairs),
                     reference=_read_only(slice_mesh(plan_mesh.triangles[story_faces], np.array([cut.height])).segments),
                     model_faces=_read_only(np.flatnonzero(in_story & without_ceiling(heights, normal_y, story, options.orient.slab_tolerance_m))),
                 )

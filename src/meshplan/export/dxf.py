@@ -24,7 +24,24 @@ LAYERS = {
     "DOORS": 30,  # orange
     "WINDOWS": 5,  # blue
     "LOW_CONFIDENCE": 1,  # red, dashed: rooms meshplan is unsure of (closed by the floor)
+    "STAIRS": 4,  # cyan: treads, walking line and arrow, the cut, the void over a stair
 }
+
+#: Block names of the door and window symbols, inserted once per opening.
+DOOR_BLOCK, WINDOW_BLOCK = "DOOR", "WINDOW"
+#: Their attributes, in this order (metres; MARK the opening's mark, D1, W1 ...).
+OPENING_ATTRIBUTES = ("WIDTH", "HEIGHT", "SILL", "MARK")
+#: Attribute text height (m of model): readable at 1:50 (2.4 mm) ...
+ATTRIBUTE_HEIGHT_M = 0.12
+#: ... centred this far (m) into the room off the middle of the opening, clear of the wall.
+ATTRIBUTE_OFFSET_M = 0.2
+#: The arrow head at the top of a stair's walking line (m of model): 0.2 m long, 0.13 m wide,
+#: 2-4 mm of paper at 1:50-1:100.
+STAIR_ARROW_M = (0.2, 0.13)
+#: Linetype scales of the stairs' DASHED (a 1.27 m dash) and DASHDOT (2.54 m) lines: 10 cm and
+#: 25 cm dashes, so that a 30 cm riser shows as dashed.
+STAIR_DASH_LTSCALE = 0.08
+VOID_DASH_LTSCALE = 0.1
 
 
 def _p(xz) -> tuple[float, float]:
@@ -79,15 +96,28 @@ def drafting_dxf(
         msp.add_lwpolyline(outline, close=True, dxfattribs={"layer": "LOW_CONFIDENCE" if low else "ROOMS", "linetype": "DASHED" if low else "BYLAYER"})
     if symbols is not None:
         _wall_solids(msp, getattr(symbols, "wall_solids", ()))
-        for seg in symbols.door_leaves:
-            msp.add_line(_p(seg[0]), _p(seg[1]), dxfattribs={"layer": "DOORS"})
-        for a in symbols.door_arcs:
-            # mirrored drawing: plan angle t becomes -t, and the arc runs the other way
-            msp.add_arc(_p(a.center), a.radius, -a.end_deg, -a.start_deg, dxfattribs={"layer": "DOORS"})
-        for seg in symbols.jambs:
-            msp.add_line(_p(seg[0]), _p(seg[1]), dxfattribs={"layer": "WALLS"})
-        for seg in symbols.windows:
-            msp.add_line(_p(seg[0]), _p(seg[1]), dxfattribs={"layer": "WINDOWS"})
+        records = getattr(symbols, "openings", ())
+        if records:
+            _opening_blocks(doc)
+            for rec in records:
+                _insert_opening(msp, rec)
+            # door jambs: the ends of the wall's cut (a window's are in its block)
+            for rec in records:
+                if rec.kind == "door":
+                    o, t, n = (np.asarray(v) for v in (rec.origin, rec.tangent, rec.normal))
+                    for q in (o, o + t * rec.width):
+                        msp.add_line(_p(q), _p(q - n * rec.depth), dxfattribs={"layer": "WALLS"})
+        else:  # symbols made without opening records: the loose lines
+            for seg in symbols.door_leaves:
+                msp.add_line(_p(seg[0]), _p(seg[1]), dxfattribs={"layer": "DOORS"})
+            for a in symbols.door_arcs:
+                # mirrored drawing: plan angle t becomes -t, and the arc runs the other way
+                msp.add_arc(_p(a.center), a.radius, -a.end_deg, -a.start_deg, dxfattribs={"layer": "DOORS"})
+            for seg in symbols.jambs:
+                msp.add_line(_p(seg[0]), _p(seg[1]), dxfattribs={"layer": "WALLS"})
+            for seg in symbols.windows:
+                msp.add_line(_p(seg[0]), _p(seg[1]), dxfattribs={"layer": "WINDOWS"})
+        _stairs(msp, getattr(symbols, "stairs", ()))
         for d in symbols.dimensions:
             p1, p2 = np.asarray(_p(d.p1)), np.asarray(_p(d.p2))
             # "left of p1 -> p2" in the plan is right of it in the mirrored drawing
@@ -122,6 +152,110 @@ def _wall_solids(msp, solids) -> None:
             hatch.paths.add_polyline_path([_p(c) for c in list(poly.exterior.coords)[:-1]], is_closed=True, flags=1)
             for ring in poly.interiors:
                 hatch.paths.add_polyline_path([_p(c) for c in list(ring.coords)[:-1]], is_closed=True, flags=0)
+
+
+def _opening_blocks(doc) -> None:
+    """The DOOR and WINDOW block definitions, in units of the opening (inserted scaled and
+    turned; local x along the wall from one jamb to the other, local y out of the face the
+    opening was found on, into the room a door swings into).
+
+    DOOR (scaled by the width both ways, so that its swing stays a circle): the leaf standing
+    open from the jamb at the origin, ``(0, 0)-(0, 1)``, and its swing, a quarter circle of
+    radius 1 from the leaf to the other jamb. WINDOW (scaled by the width along x and the wall's
+    depth along y): the frame lines across the wall's thickness (both faces and the middle,
+    ``y`` = 0, -0.5, -1) and the jambs. Both carry the attributes
+    :data:`OPENING_ATTRIBUTES` (MARK shown beside the opening, the others hidden)."""
+    door = doc.blocks.new(name=DOOR_BLOCK)
+    door.add_line((0, 0), (0, 1))
+    door.add_arc((0, 0), 1.0, 0.0, 90.0)
+    window = doc.blocks.new(name=WINDOW_BLOCK)
+    for y in (0.0, -0.5, -1.0):
+        window.add_line((0, y), (1, y))
+    for x in (0.0, 1.0):
+        window.add_line((x, 0), (x, -1))
+    for block in (door, window):
+        for k, tag in enumerate(OPENING_ATTRIBUTES):
+            flags = 0 if tag == "MARK" else 1  # 1: invisible
+            block.add_attdef(tag, (0.5, 0.15 + 0.2 * k), dxfattribs={"height": ATTRIBUTE_HEIGHT_M, "flags": flags})
+
+
+def _insert_opening(msp, rec) -> None:
+    """One door or window (:class:`meshplan.plan.symbols.OpeningSymbol`) as an INSERT of its
+    block on DOORS or WINDOWS, with its width, height, sill and mark as attributes."""
+    from ezdxf.enums import TextEntityAlignment
+
+    t = np.array(_p(rec.tangent))
+    n = np.array(_p(rec.normal))
+    rotation = float(np.degrees(np.arctan2(t[1], t[0])))
+    # the block's +y is the face's normal, or its mirror image (the plan's z is flipped)
+    side = 1.0 if t[0] * n[1] - t[1] * n[0] > 0 else -1.0
+    door = rec.kind == "door"
+    xscale = rec.width
+    yscale = side * (rec.width if door else rec.depth)
+    ref = msp.add_blockref(
+        DOOR_BLOCK if door else WINDOW_BLOCK,
+        _p(rec.origin),
+        dxfattribs={"layer": "DOORS" if door else "WINDOWS", "xscale": xscale, "yscale": yscale, "rotation": rotation},
+    )
+    values = {"WIDTH": f"{rec.width:.3f}", "HEIGHT": f"{rec.height:.3f}", "SILL": f"{rec.sill:.3f}", "MARK": _literal_text(rec.mark)}
+    ref.add_auto_attribs(values)
+    # the texts upright, unmirrored and at their height whatever the insert's scale and turn,
+    # centred a little into the room off the middle of the opening
+    o, t, n = (np.asarray(v, dtype=np.float64) for v in (rec.origin, rec.tangent, rec.normal))
+    at = _p(o + t * 0.5 * rec.width + n * ATTRIBUTE_OFFSET_M)
+    for attrib in ref.attribs:
+        attrib.dxf.height = ATTRIBUTE_HEIGHT_M
+        attrib.dxf.width = 1.0
+        attrib.dxf.rotation = 0.0
+        attrib.dxf.oblique = 0.0
+        attrib.dxf.text_generation_flag = 0
+        attrib.set_placement(at, align=TextEntityAlignment.MIDDLE_CENTER)
+
+
+def _stairs(msp, stairs) -> None:
+    """The stair symbols (:class:`meshplan.plan.symbols.StairSymbol`) on STAIRS: treads and
+    stringers, the part above the cut DASHED, the break line, the walking line with a filled
+    arrow head at its top, the void dash-dotted (DASHDOT) with its cross, and the risers' text."""
+    from ezdxf.enums import TextEntityAlignment
+
+    for st in stairs:
+        for seg in st.lines:
+            msp.add_line(_p(seg[0]), _p(seg[1]), dxfattribs={"layer": "STAIRS"})
+        for seg in st.hidden:
+            msp.add_line(_p(seg[0]), _p(seg[1]), dxfattribs={"layer": "STAIRS", "linetype": "DASHED", "ltscale": STAIR_DASH_LTSCALE})
+        for seg in st.cross:
+            msp.add_line(_p(seg[0]), _p(seg[1]), dxfattribs={"layer": "STAIRS"})
+        if len(st.cut) >= 2:
+            msp.add_lwpolyline([_p(q) for q in st.cut], dxfattribs={"layer": "STAIRS"})
+        if len(st.walk) >= 2:
+            msp.add_lwpolyline([_p(q) for q in st.walk], dxfattribs={"layer": "STAIRS"})
+        if len(st.walk_hidden) >= 2:
+            msp.add_lwpolyline([_p(q) for q in st.walk_hidden], dxfattribs={"layer": "STAIRS", "linetype": "DASHED", "ltscale": STAIR_DASH_LTSCALE})
+        if len(st.void) >= 4:
+            void = [_p(q) for q in st.void[:-1]]
+            msp.add_lwpolyline(void, close=True, dxfattribs={"layer": "STAIRS", "linetype": "DASHDOT", "ltscale": VOID_DASH_LTSCALE})
+        ends = [w for w in (st.walk_hidden, st.walk) if len(w) >= 2]
+        if ends:
+            tip, d = np.asarray(ends[0][-1]), np.asarray(st.arrow)
+            across = np.array([-d[1], d[0]])
+            length, width = STAIR_ARROW_M
+            a, b = tip - d * length + across * 0.5 * width, tip - d * length - across * 0.5 * width
+            hatch = msp.add_hatch(dxfattribs={"layer": "STAIRS"})
+            hatch.paths.add_polyline_path([_p(tip), _p(a), _p(b)], is_closed=True)
+        if st.role == "lower" and len(st.walk) >= 2:
+            foot = np.asarray(st.walk[0])
+            msp.add_circle(_p(foot), 0.04, dxfattribs={"layer": "STAIRS"})
+            d = np.asarray(st.walk[1]) - foot
+            d = d / (np.linalg.norm(d) or 1.0)
+            text = msp.add_text(_literal_text(st.text), height=0.1, dxfattribs={"layer": "STAIRS"})
+            # along the flight, reading upright, running away from the stair from just before its foot
+            angle = float(np.degrees(np.arctan2(-d[1], d[0])))
+            rotation = angle + 180.0 if abs(angle) > 90.0 else angle
+            reads = np.array([np.cos(np.radians(rotation)), np.sin(np.radians(rotation))])
+            away = float(reads @ np.array([-d[0], d[1]])) > 0  # reading away from the stair
+            align = TextEntityAlignment.MIDDLE_LEFT if away else TextEntityAlignment.MIDDLE_RIGHT
+            text.set_placement(_p(foot - d * 0.12), align=align)
+            text.dxf.rotation = rotation
 
 
 def _literal_text(text: str) -> str:

@@ -342,9 +342,10 @@ STAIR_TYPES = {"straight": "STRAIGHT_RUN_STAIR", "L": "QUARTER_TURN_STAIR", "U":
 
 
 def _add_stairs(f, result: Result, storeys: dict, body) -> None:
-    """An IfcStair per stair in the storey it starts on, aggregating an IfcStairFlight per
-    flight and an IfcSlab (LANDING) per landing, each tread a block one rise deep below its
-    height; Pset_StairCommon and a ``meshplan`` property set with what it connects."""
+    """An IfcStair per stair in the storey it starts on, with its footprint (a FootPrint
+    Curve2D representation in a Plan context), aggregating an IfcStairFlight per flight and an
+    IfcSlab (LANDING) per landing, each tread a block one rise deep below its height;
+    Pset_StairCommon and a ``meshplan`` property set with what it connects."""
     from ifcopenshell.api import aggregate, geometry, pset, root, spatial
 
     def block(tread, depth: float):
@@ -361,10 +362,21 @@ def _add_stairs(f, result: Result, storeys: dict, body) -> None:
         product.ObjectPlacement = f.createIfcLocalPlacement(parent.ObjectPlacement, at)
 
     room_no = [r.number or r.label for r in result.rooms]
+    footprint_context = None
+    if result.stairs:
+        from ifcopenshell.api import context
+
+        plan = context.add_context(f, context_type="Plan")
+        footprint_context = context.add_context(f, context_type="Plan", context_identifier="FootPrint", target_view="PLAN_VIEW", parent=plan)
     for k, s in enumerate(result.stairs):
         st, _ = storeys[s.story]
         stair = root.create_entity(f, ifc_class="IfcStair", name=f"Stair {k + 1}", predefined_type=STAIR_TYPES.get(s.shape, "NOTDEFINED"))
         geometry.edit_object_placement(f, product=stair, matrix=_placement((0.0, 0.0), 0.0))
+        if footprint_context is not None and not s.footprint.is_empty:
+            # its outline in plan (the FootPrint a plan view draws), at the height it starts from
+            ring = [f.createIfcCartesianPoint(_ifc_xy(p)) for p in list(_outer(s.footprint).exterior.coords)]
+            rep = f.createIfcShapeRepresentation(footprint_context, "FootPrint", "Curve2D", [f.createIfcPolyline(ring)])
+            geometry.assign_representation(f, product=stair, representation=rep)
         spatial.assign_container(f, products=[stair], relating_structure=st)
         parts = []
         for i, fl in enumerate(s.flights):
@@ -399,6 +411,14 @@ def _add_stairs(f, result: Result, storeys: dict, body) -> None:
         if s.void is not None:
             props["void_area"] = float(s.void.area)
         pset.edit_pset(f, pset=ps, properties=props)
+
+
+def _outer(poly):
+    """The largest polygon of a (multi)polygon, without holes: a footprint's outline."""
+    from shapely.geometry import Polygon
+
+    parts = list(getattr(poly, "geoms", [poly]))
+    return Polygon(max(parts, key=lambda g: g.area).exterior)
 
 
 def _make_deterministic(f) -> None:

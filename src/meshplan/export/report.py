@@ -50,7 +50,10 @@ if TYPE_CHECKING:  # pragma: no cover
     from ..result import Result
 
 # ViewMesh, ViewMeshes, subsample_faces and view_meshes live in view3d; named here as before
-__all__ = ["KIND_PREFIX", "MAX_FACES", "PROBE_M", "SUBSAMPLE_SEED", "ViewMesh", "ViewMeshes", "inline_svg", "report_html", "subsample_faces", "view_meshes"]
+__all__ = [
+    "KIND_PREFIX", "MAX_FACES", "PROBE_M", "SUBSAMPLE_SEED", "ViewMesh", "ViewMeshes", "inline_svg", "report_html", "report_page",
+    "subsample_faces", "view_meshes",
+]
 
 _ID = re.compile(r'\bid="([^"]+)"')
 _REF = re.compile(r'(href="#|url\(#)([^")]+)')
@@ -257,6 +260,19 @@ def _asset(name: str) -> str:
     return resources.files("meshplan").joinpath(f"export/assets/{name}").read_text(encoding="utf-8")
 
 
+#: plotly.js's 3D-only build (npm ``plotly.js-gl3d-dist-min``, MIT licence beside it in the
+#: assets), of the plotly.js version the plotly package bundles: the page draws ``mesh3d`` and
+#: ``scatter3d`` traces only, which it holds, in 1.75 MB where the full bundle takes 4.8 MB.
+PLOTLY_BUNDLE = "plotly-gl3d.min.js"
+PLOTLY_JS_VERSION = "4.1.1"
+
+
+def _plotly_bundle() -> str:
+    """The plotly.js bundle the page inlines, headed by its version (the 3D build's own
+    header names its build, not the version alone)."""
+    return f"/* plotly.js v{PLOTLY_JS_VERSION}, gl3d build ({PLOTLY_BUNDLE}) */\n" + _asset(PLOTLY_BUNDLE)
+
+
 def _script(js: str) -> Markup:
     # a literal "</script" would end the element early
     return Markup(js.replace("</script", "<\\/script"))
@@ -267,28 +283,11 @@ def _json_script(obj: Any) -> Markup:
     return Markup(json.dumps(obj, separators=(",", ":"), allow_nan=False).replace("<", "\\u003c"))
 
 
-def report_html(result: Result, files: dict[str, bytes], *, max_faces: int = MAX_FACES) -> str:
-    """The self-contained report.html of a result.
-
-    Parameters
-    ----------
-    result
-        What :func:`meshplan.run` found.
-    files
-        The other output files (``name -> bytes``) as :func:`meshplan.export.render_files`
-        makes them; the plans (``pen-and-ink-{i}.svg``, ``drafting-{i}.svg``) and figures
-        (``levels.png``, ``normals.png``) are taken from there.
-    max_faces
-        Most faces the 3D view shows (see :data:`~meshplan.export.view3d.MAX_FACES`).
-
-    Returns
-    -------
-    str
-        The page; it loads nothing from anywhere. Only the timing values change from one run
-        of the same scan to the next.
-    """
-    import plotly.offline
-
+def report_page(result: Result, *, max_faces: int = MAX_FACES) -> dict[str, Any]:
+    """What the page shows that the other files do not hold: the 3D view's data, the tables,
+    the bundled scripts (the report's costly part, which :func:`meshplan.export.render_files`
+    builds while the drawing workers draw). ``report_html(result, files, page=...)`` fills the
+    page from it."""
     doc = plan_document(result)
     view = view_meshes(result, max_faces)
     # the energy model's layers are drawn too, but are no faces of the scan (the note counts those)
@@ -307,7 +306,7 @@ def report_html(result: Result, files: dict[str, bytes], *, max_faces: int = MAX
     rooms = doc.get("rooms") or []
     indices = {sp.story.index for sp in result.stories}
     timings_header, timings = _timings(result)
-    return _environment().get_template("report.html.j2").render(
+    context = dict(
         scan=result.input.path.replace("\\", "/").rsplit("/", 1)[-1],
         summary=(
             f"{result.input.faces:,} faces, {len(result.stories)} "
@@ -320,11 +319,8 @@ def report_html(result: Result, files: dict[str, bytes], *, max_faces: int = MAX
         story_indices=[sp.story.index for sp in result.stories],
         kinds=list(ANNOTATION_KINDS),
         units=result.input.units,
-        stories=_stories(result, files, doc),
         north_deg=f"{result.options.export.north_deg:g}",
         other_rooms=_generic_table(rooms) if rooms and not any(r.get("story", 0) in indices for r in rooms) else None,
-        levels=_figure(files, "levels.png", "altitude histogram"),
-        normals=_figure(files, "normals.png", "normals heat map"),
         story_rows=_story_rows(result),
         timings_header=timings_header,
         timings=timings,
@@ -334,6 +330,39 @@ def report_html(result: Result, files: dict[str, bytes], *, max_faces: int = MAX
         ],
         css=Markup(_asset("report.css")),
         data=_json_script(_with_energy_colors(page_data(result, shown), view)),
-        plotly=_script(plotly.offline.get_plotlyjs()),
+        plotly=_script(_plotly_bundle()),
         script=_script(_asset("report.js")),
+    )
+    return {"doc": doc, "context": context}
+
+
+def report_html(result: Result, files: dict[str, bytes], *, max_faces: int = MAX_FACES, page: dict[str, Any] | None = None) -> str:
+    """The self-contained report.html of a result.
+
+    Parameters
+    ----------
+    result
+        What :func:`meshplan.run` found.
+    files
+        The other output files (``name -> bytes``) as :func:`meshplan.export.render_files`
+        makes them; the plans (``pen-and-ink-{i}.svg``, ``drafting-{i}.svg``) and figures
+        (``levels.png``, ``normals.png``) are taken from there.
+    max_faces
+        Most faces the 3D view shows (see :data:`~meshplan.export.view3d.MAX_FACES`).
+    page
+        :func:`report_page` of this result (with this ``max_faces``), when already made.
+
+    Returns
+    -------
+    str
+        The page; it loads nothing from anywhere. Only the timing values change from one run
+        of the same scan to the next.
+    """
+    if page is None:
+        page = report_page(result, max_faces=max_faces)
+    return _environment().get_template("report.html.j2").render(
+        **page["context"],
+        stories=_stories(result, files, page["doc"]),
+        levels=_figure(files, "levels.png", "altitude histogram"),
+        normals=_figure(files, "normals.png", "normals heat map"),
     )

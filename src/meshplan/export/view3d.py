@@ -18,7 +18,7 @@ import numpy as np
 
 from .._version import __version__
 from ..geometry import ANNOTATION_KINDS, ANNOTATION_PROBE_M, Mesh, transform_directions, transform_points
-from .glb import KIND_RGBA, MESH_RGBA, WALL_RGBA
+from .glb import KIND_RGBA, MESH_RGBA, WALL_RGBA, submesh
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..result import Result
@@ -26,8 +26,8 @@ if TYPE_CHECKING:  # pragma: no cover
 __all__ = ["KIND_PREFIX", "MAX_FACES", "PROBE_M", "SUBSAMPLE_SEED", "ViewMesh", "ViewMeshes", "page_data", "subsample_faces", "view_meshes"]
 
 #: Most faces the 3D view shows. Measured in Chromium: plotly builds a 120k-face scene in about
-#: 1 s and keeps rotating it smoothly, and the page stays well under 15 MB (plotly's bundle is
-#: 4.8 MB of it); past this the scan is shown as a subsample of its faces.
+#: 1 s and keeps rotating it smoothly, and the page stays under 7 MB (plotly's 3D bundle is
+#: 1.75 MB of it); past this the scan is shown as a subsample of its faces.
 MAX_FACES = 120_000
 
 #: Seed of the face subsample (fixed, so that the page is the same for the same result).
@@ -136,7 +136,7 @@ def view_meshes(result: Result, max_faces: int = MAX_FACES) -> ViewMeshes:
     for sp, faces, wall_mesh in zip(result.stories, scan_faces, walls):
         i = sp.story.index
         pick = faces[subsample_faces(mesh.face_areas[faces], int(math.floor(frac * len(faces))), SUBSAMPLE_SEED + i)]
-        layers.append(ViewMesh(f"story {i}: scan", "scan", i, mesh.submesh(pick), len(faces)))
+        layers.append(ViewMesh(f"story {i}: scan", "scan", i, submesh(mesh, pick), len(faces)))
         layers.append(ViewMesh(f"story {i}: flat walls", "walls", i, wall_mesh, wall_mesh.n_faces))
     return ViewMeshes(tuple(layers), max_faces)
 

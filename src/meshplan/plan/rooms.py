@@ -91,6 +91,12 @@ TOUCH_M = 2e-3
 #: the slits leave (5 mm: within the scan's noise, far below a wall's thickness).
 SIMPLIFY_M = 0.005
 
+#: Notches narrower than this (m) in a room's outline are filled (a morphological closing): no
+#: space is that narrow and no wall that thin, so such a notch is what two wall faces a few
+#: millimetres apart leave when the sliver between them is dropped (a 4 mm slot 1.5 m deep in
+#: a HoloLens hall), and an energy model or a label placer would take it for a wall.
+NARROW_NOTCH_M = 0.05
+
 #: Mitre limit of the buffers of the morphological opening (2: a right-angled corner keeps its
 #: mitre, a spike does not).
 OPENING_MITRE_LIMIT = 2.0
@@ -321,7 +327,17 @@ def find_rooms(
     for story in orientation.stories:
         found.extend((story.index, poly, how) for poly, how in story_rooms(mesh, orientation, walls, story, params, slab_tolerance_m))
     found.sort(key=lambda r: (r[0], round(r[1].centroid.y, ORDER_DECIMALS), round(r[1].centroid.x, ORDER_DECIMALS)))
-    return tuple(Room(s, f"Room {i + 1}", _canonical(poly), how) for i, (s, poly, how) in enumerate(found))
+    return tuple(Room(s, f"Room {i + 1}", _canonical(_fill_notches(poly)), how) for i, (s, poly, how) in enumerate(found))
+
+
+def _fill_notches(poly: Polygon) -> Polygon:
+    """``poly`` with the notches narrower than :data:`NARROW_NOTCH_M` filled (a closing with a
+    square, which keeps right-angled corners); ``poly`` itself when it has none."""
+    r = NARROW_NOTCH_M / 2
+    closed = poly.buffer(r, join_style="mitre").buffer(-r, join_style="mitre")
+    if not isinstance(closed, Polygon) or closed.is_empty or closed.area - poly.area <= SIMPLIFY_M * SIMPLIFY_M:
+        return poly
+    return shapely.orient_polygons(Polygon(shapely.simplify(closed, SIMPLIFY_M).exterior), exterior_cw=True)
 
 
 def _canonical(poly: Polygon) -> Polygon:

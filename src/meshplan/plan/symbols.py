@@ -1,5 +1,5 @@
-"""Drafting symbols in plan coordinates: door leaves and swings, window sashes, jambs, room labels
-and dimension lines. Drawings (matplotlib) and CAD files (DXF) draw the same symbols.
+"""Drafting symbols in plan coordinates: door leaves and swings, window sashes, jambs, room labels,
+dimension lines and stairs. Drawings (matplotlib) and CAD files (DXF) draw the same symbols.
 
 A door between two rooms is found on both faces of its wall; it is drawn once, swinging into the
 room of the first face found, with jamb lines across the wall. A window is drawn as the usual
@@ -10,6 +10,7 @@ triple line across the wall. Wall thickness comes from the physical walls (see
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 import shapely
@@ -21,6 +22,9 @@ from ..walls import FlatWalls
 from ..walls.physical import PhysicalWall, wall_of_face
 from .openings import Openings
 from .rooms import Room
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .stairs import StairElement
 
 
 @dataclass(frozen=True)
@@ -98,6 +102,52 @@ class RoomDimension:
     across: tuple[float, ...]
 
 
+@dataclass(frozen=True)
+class OpeningSymbol:
+    """One door or window as drawn (once per physical opening), for CAD blocks: its jamb on the
+    face it was found on ``origin`` [x, z], the unit ``tangent`` along the wall (towards the other
+    jamb) and ``normal`` out of that face (into the room a door swings into), its clear ``width``,
+    the wall's ``depth``, its ``height`` and ``sill`` (m above the story's floor; 0 for a door) and
+    its ``mark`` (D1, D2 ... and W1, W2 ... per story, in the order drawn)."""
+
+    kind: str
+    origin: tuple[float, float]
+    tangent: tuple[float, float]
+    normal: tuple[float, float]
+    width: float
+    depth: float
+    height: float
+    sill: float
+    mark: str
+
+
+@dataclass(frozen=True, eq=False)
+class StairSymbol:
+    """A stair as drawn on one story's plan (the usual symbol; plan coordinates, metres).
+
+    ``role`` is ``lower`` on the story the stair starts on (treads below the cut solid, above it
+    dashed, a break line across the flight at the cut) and ``upper`` on the story it arrives at
+    (every tread seen from above through the void, which is outlined and crossed). ``lines`` are
+    the visible tread and stringer lines ``(S, 2, 2)``, ``hidden`` those above the cut; ``walk``
+    the walking line (bottom to top, ``(k, 2)``; ``walk_hidden`` its part above the cut) ending in
+    the arrow of ascent at its last point, pointing along ``arrow``; ``cut`` the break line
+    (``(k, 2)``, empty on the upper story); ``void`` the ring of the hole in the floor (upper
+    story only; empty otherwise); ``text`` the risers and their rise and going."""
+
+    stair: int
+    role: str
+    lines: FloatArray
+    hidden: FloatArray
+    walk: FloatArray
+    walk_hidden: FloatArray
+    arrow: tuple[float, float]
+    cut: FloatArray
+    void: FloatArray
+    text: str
+    #: the void's cross (``(S, 2, 2)``, upper story only)
+    cross: FloatArray = field(default_factory=lambda: np.zeros((0, 2, 2)))
+
+
 @dataclass(frozen=True, eq=False)
 class PlanSymbols:
     door_leaves: FloatArray = field(default_factory=lambda: np.zeros((0, 2, 2)))
@@ -114,6 +164,10 @@ class PlanSymbols:
     #: overall and per-wall dimension chains outside the building; room sizes inside
     chains: tuple[DimensionChain, ...] = ()
     room_dimensions: tuple[RoomDimension, ...] = ()
+    #: each door and window once, for CAD blocks (:class:`OpeningSymbol`)
+    openings: tuple[OpeningSymbol, ...] = ()
+    #: the stairs starting or arriving on the story (:class:`StairSymbol`)
+    stairs: tuple[StairSymbol, ...] = ()
 
 
 def format_length(m: float, imperial: bool) -> str:
@@ -146,11 +200,17 @@ def plan_symbols(
     physical: tuple[PhysicalWall, ...],
     imperial: bool = False,
     dimension_offset_m: float = 0.3,
+    stairs: tuple[StairElement, ...] = (),
 ) -> PlanSymbols:
     """The symbols of one story's drafting plan; door jambs and window sashes span the
-    thickness of the ``physical`` wall carrying each opening."""
+    thickness of the ``physical`` wall carrying each opening. ``stairs`` (``Result.stairs``)
+    are drawn on the stories they start on and arrive at (:func:`stair_symbols`)."""
     carrier = wall_of_face(physical, len(walls))
     leaves, arcs, jambs, windows = [], [], [], []
+    records: list[OpeningSymbol] = []
+    mine_walls = walls.story == story
+    # the story's floor, for sill heights: where its walls stand
+    floor = float(np.median(walls.bottom[mine_walls])) if np.any(mine_walls) else 0.0
     drawn: list[tuple[FloatArray, float]] = []  # door centres already drawn
     centers = openings.center(walls) if len(openings) else np.zeros((0, 2))
     for i in np.flatnonzero(openings.story == story):
@@ -176,6 +236,21 @@ def plan_symbols(
         else:
             for f in (0.0, 0.5, 1.0):
                 windows.append([p0 + back * f, p1 + back * f])
+        door = openings.kind[i] == "door"
+        number = sum(r.kind == openings.kind[i] for r in records) + 1
+        records.append(
+            OpeningSymbol(
+                str(openings.kind[i]),
+                (float(p0[0]), float(p0[1])),
+                (float(t[0]), float(t[1])),
+                (float(n[0]), float(n[1])),
+                float(u1 - u0),
+                float(depth),
+                float(openings.top[i] - openings.bottom[i]),
+                0.0 if door else max(0.0, float(openings.bottom[i]) - floor),
+                f"{'D' if door else 'W'}{number}",
+            )
+        )
         jambs.append([p0, p0 + back])
         jambs.append([p1, p1 + back])
     dims, labels, outlines = [], [], []
@@ -216,7 +291,288 @@ def plan_symbols(
         tuple(r.type for r in mine_rooms),
         dimension_chains(story, walls, openings, physical, solids),
         room_dimensions(mine_rooms),
+        tuple(records),
+        stair_symbols(story, stairs, imperial),
     )
+
+
+# --- stairs ------------------------------------------------------------------------------------
+
+#: The break line of a stair's cut is slanted across the flight by this much of the flight's
+#: width along it (about 20 degrees off square, as it is usually drawn), ...
+_CUT_SLANT = 0.35
+#: ... with a zig-zag of this size (m) in its middle, so that it reads as a break, not a tread.
+_CUT_ZIGZAG_M = 0.08
+
+
+def _segments_of(geom) -> list:
+    """The straight pieces ``[[a, b], ...]`` of a shapely line geometry."""
+    out = []
+    for g in getattr(geom, "geoms", [geom]):
+        if g.is_empty or g.geom_type not in ("LineString", "LinearRing"):
+            continue
+        c = np.asarray(g.coords)
+        out += [[c[k], c[k + 1]] for k in range(len(c) - 1) if np.linalg.norm(c[k + 1] - c[k]) > 1e-6]
+    return out
+
+
+def _lines_of(geom) -> list[FloatArray]:
+    """The coordinates of each line of a shapely geometry, longest first."""
+    out = [np.asarray(g.coords) for g in getattr(geom, "geoms", [geom]) if not g.is_empty and g.geom_type == "LineString"]
+    return sorted(out, key=lambda c: -shapely.LineString(c).length)
+
+
+def _frame_extent(poly, d: FloatArray) -> tuple[float, float, float, float]:
+    """``(s0, s1, a0, a1)``: a polygon's extent along ``d`` and across it."""
+    xy = np.asarray(poly.exterior.coords)
+    across = np.array([-d[1], d[0]])
+    s, a = xy @ d, xy @ across
+    return float(s.min()), float(s.max()), float(a.min()), float(a.max())
+
+
+def _flight_box(stair: StairElement, flight) -> tuple[FloatArray, FloatArray, float, float, float, float]:
+    """A flight as a regular rectangle in its own frame: ``(d, across, s0, s1, a0, a1)``, from
+    its first riser to its last, as wide as its treads' median width, centred on its walking
+    line; each riser at a tread centroid less half a going."""
+    d = np.asarray(flight.direction, dtype=np.float64)
+    d = d / (np.linalg.norm(d) or 1.0)
+    across = np.array([-d[1], d[0]])
+    cen = np.array([np.asarray(stair.treads[k].polygon.centroid.coords[0]) for k in flight.treads])
+    s = cen @ d
+    half = 0.5 * (flight.going or stair.going)
+    ext = [_frame_extent(stair.treads[k].polygon, d) for k in flight.treads]
+    width = float(np.median([e[3] - e[2] for e in ext]))
+    mid = float(np.median(cen @ across))
+    return d, across, float(s.min() - half), float(s.max() + half), mid - 0.5 * width, mid + 0.5 * width
+
+
+def stair_symbols(story: int, stairs: tuple[StairElement, ...], imperial: bool = False) -> tuple[StairSymbol, ...]:
+    """The stair symbols of ``story``: for each stair starting on it (``lower``) and arriving on
+    it (``upper``), the risers across each flight and the stringers along it, the landings, the
+    walking line from the first riser to the last with the arrow of ascent; on the lower story
+    a break line across the flight where the plan's cut meets it and the part above it hidden
+    (dashed); on the upper story the void over the stair, outlined and crossed.
+
+    On a story where one stair arrives and the next starts over it (a stacked stairwell), the
+    arriving stair is hidden under the starting one's part below the cut, its void is not
+    crossed, and the starting stair's part above the cut is left out where the arriving one is
+    seen: the walking line of the starting stair then ends with its arrow at the cut."""
+    from dataclasses import replace
+
+    lower = [(k, *_stair_symbol(k, st, "lower", imperial)) for k, st in enumerate(stairs) if st.story == story and st.flights]
+    upper = [(k, *_stair_symbol(k, st, "upper", imperial)) for k, st in enumerate(stairs) if st.to_story == story and st.flights]
+    covers = [c for _, _, c in lower if c is not None]
+    out: list[StairSymbol] = []
+    seen = [stairs[k].footprint for k, _, _ in upper]
+    for _, sym, _ in lower:
+        if seen and any(stairs[sym.stair].footprint.intersects(f) for f in seen):
+            sym = replace(sym, hidden=np.zeros((0, 2, 2)), walk_hidden=np.zeros((0, 2)))
+        out.append(sym)
+    for k, sym, _ in upper:
+        if covers and any(stairs[k].footprint.intersects(c) for c in covers):
+            sym = replace(_hide_under(sym, shapely.union_all(covers)), cross=np.zeros((0, 2, 2)))
+        out.append(sym)
+    return tuple(out)
+
+
+def void_cross(ring: FloatArray) -> FloatArray:
+    """The two diagonals of a void's oriented bounding box, within the void (``(S, 2, 2)``):
+    the usual mark of a hole in a floor."""
+    poly = shapely.Polygon(ring)
+    if len(ring) < 4 or not poly.is_valid or poly.is_empty:
+        return np.zeros((0, 2, 2))
+    corners = np.asarray(shapely.oriented_envelope(poly).exterior.coords)[:4]
+    segs: list = []
+    for a, b in ((corners[0], corners[2]), (corners[1], corners[3])):
+        segs += _segments_of(shapely.LineString([a, b]).intersection(poly))
+    return np.array(segs, dtype=np.float64).reshape(-1, 2, 2)
+
+
+def _hide_under(sym: StairSymbol, cover) -> StairSymbol:
+    """``sym`` without the lines under ``cover`` (a stair above it)."""
+    from dataclasses import replace
+
+    def clip(segs: FloatArray) -> FloatArray:
+        if not len(segs):
+            return segs
+        left = shapely.MultiLineString([s.tolist() for s in segs]).difference(cover)
+        return np.array(_segments_of(left), dtype=np.float64).reshape(-1, 2, 2)
+
+    def clip_line(walk: FloatArray) -> FloatArray:
+        if len(walk) < 2:
+            return walk
+        # the piece arriving at the top, where the arrow is: a stub cut off from it says nothing
+        top = walk[-1]
+        pieces = [c for c in _lines_of(shapely.LineString(walk).difference(cover)) if np.linalg.norm(c[-1] - top) < 1e-6]
+        return pieces[0] if pieces else np.zeros((0, 2))
+
+    return replace(sym, lines=clip(sym.lines), hidden=clip(sym.hidden), walk=clip_line(sym.walk))
+
+
+def _drawn_flights(st: StairElement) -> list:
+    """The stair's flights as drawn: a flight that follows the previous one without a landing
+    between them (sharing a tread: a partly scanned last tread that turned the fit) continues
+    it, in its direction."""
+    from .stairs import Flight
+
+    out: list = []
+    for fl in st.flights:
+        if out and fl.treads:
+            prev = out[-1]
+            between = range(prev.treads[-1] + 1, fl.treads[0])
+            if not any(st.treads[j].landing for j in between):
+                treads = tuple(sorted(set(prev.treads) | set(fl.treads)))
+                out[-1] = Flight(treads, prev.direction, prev.risers + fl.risers, prev.going)
+                continue
+        out.append(fl)
+    return out
+
+
+def _stair_symbol(k: int, st: StairElement, role: str, imperial: bool):
+    """One stair's symbol on the story where it plays ``role``, and the plan area of its
+    visible (below the cut) part on the lower story (``None`` on the upper)."""
+    segs: list = []
+    walk: list = []
+    flights = _drawn_flights(st)
+    boxes = [_flight_box(st, fl) for fl in flights]
+    for fl, (d, across, s0, s1, a0, a1) in zip(flights, boxes):
+        def pt(u, v, d=d, across=across):
+            return d * u + across * v
+
+        n = max(len(fl.treads), 1)
+        for j in range(n + 1):  # risers, evenly between the first and the last
+            u = s0 + (s1 - s0) * j / n
+            segs.append([pt(u, a0), pt(u, a1)])
+        segs += [[pt(s0, a0), pt(s1, a0)], [pt(s0, a1), pt(s1, a1)]]
+        m = 0.5 * (a0 + a1)
+        walk.append((pt(s0, m), pt(s1, m)))
+    # landings: their extent in the frame of the flight arriving at them
+    for j, tr in enumerate(st.treads):
+        if not tr.landing:
+            continue
+        before = [i for i, fl in enumerate(flights) if fl.treads and fl.treads[-1] < j]
+        d = boxes[before[-1]][0] if before else boxes[0][0]
+        s0, s1, a0, a1 = _frame_extent(tr.polygon, d)
+        across = np.array([-d[1], d[0]])
+        corners = [d * u + across * v for u, v in ((s0, a0), (s1, a0), (s1, a1), (s0, a1))]
+        segs += [[corners[i], corners[(i + 1) % 4]] for i in range(4)]
+    # the walking line: along each flight, turning in the landings between them
+    line: list = [walk[0][0], walk[0][1]]
+    for i in range(1, len(walk)):
+        d_prev, d_next = boxes[i - 1][0], boxes[i][0]
+        a, b = walk[i - 1][1], walk[i][0]
+        gap = b - a
+        turn = float(d_prev @ d_next)
+        # the landing between the two flights
+        lands = [st.treads[j] for j in range(flights[i - 1].treads[-1] + 1, flights[i].treads[0]) if st.treads[j].landing]
+        if turn < -0.5:  # a U: half way into the landing, across it, and back
+            e = _frame_extent(lands[0].polygon, d_prev) if lands else (0.0, 0.0, 0.0, 0.0)
+            t1 = a + d_prev * 0.5 * (e[1] - e[0])
+            line += [t1, t1 + gap - d_prev * float(gap @ d_prev), b]
+        elif turn < 0.5:  # an L: turning where the two flights' walking lines cross
+            line += [a + d_prev * float(gap @ d_prev), b]
+        else:
+            line.append(b)
+        line.append(walk[i][1])
+    walk_pts = np.array(line, dtype=np.float64)
+    keep = np.r_[True, np.linalg.norm(np.diff(walk_pts, axis=0), axis=1) > 1e-6]
+    walk_pts = walk_pts[keep]
+    arrow = walk_pts[-1] - walk_pts[-2] if len(walk_pts) >= 2 else np.asarray(st.direction)
+    arrow = arrow / (np.linalg.norm(arrow) or 1.0)
+    text = f"{st.risers} R {format_length(st.rise, imperial)} / {format_length(st.going, imperial)}"
+    empty2, empty1 = np.zeros((0, 2, 2)), np.zeros((0, 2))
+    lines = np.array(segs, dtype=np.float64).reshape(-1, 2, 2)
+    if role == "upper":
+        void = np.asarray(st.void.exterior.coords) if st.void is not None and not st.void.is_empty and st.void.geom_type == "Polygon" else empty1
+        sym = StairSymbol(k, role, lines, empty2, walk_pts, empty1, (float(arrow[0]), float(arrow[1])), empty1, void, text, void_cross(void))
+        return sym, None
+    cut, high = _stair_cut(st, flights, boxes)
+    if high is None:
+        sym = StairSymbol(k, role, lines, empty2, walk_pts, empty1, (float(arrow[0]), float(arrow[1])), empty1, empty1, text)
+        return sym, st.footprint
+    ml = shapely.MultiLineString([s.tolist() for s in lines])
+    wl = shapely.LineString(walk_pts)
+    # the piece from the foot up to the cut, and the one from the cut to the top (the arrow's)
+    below_walk = [c for c in _lines_of(wl.difference(high)) if np.linalg.norm(c[0] - walk_pts[0]) < 1e-6]
+    above_walk = [c for c in _lines_of(wl.intersection(high)) if np.linalg.norm(c[-1] - walk_pts[-1]) < 1e-6]
+    as3 = lambda g: np.array(_segments_of(g), dtype=np.float64).reshape(-1, 2, 2)  # noqa: E731
+    sym = StairSymbol(
+        k,
+        role,
+        as3(ml.difference(high)),
+        as3(ml.intersection(high)),
+        below_walk[0] if below_walk else empty1,
+        above_walk[0] if above_walk else empty1,
+        (float(arrow[0]), float(arrow[1])),
+        cut,
+        empty1,
+        text,
+    )
+    return sym, st.footprint.buffer(0.02).difference(high)
+
+
+def _stair_cut(st: StairElement, flights: list, boxes: list):
+    """Where the plan's cut meets the stair: the break line across its flight (``(k, 2)``) and
+    the plan area above the cut (``None`` when the whole stair is below it)."""
+    heights = np.array([tr.height for tr in st.treads])
+    above = np.flatnonzero(heights > st.cut_height)
+    if not len(above):
+        return np.zeros((0, 2)), None
+    first = int(above[0])
+    # the flight holding the first tread above the cut (a landing: the flight before it)
+    fi = next((i for i, fl in enumerate(flights) if first in fl.treads), None)
+    if fi is None:
+        fi = max([i for i, fl in enumerate(flights) if fl.treads and fl.treads[-1] < first] or [0])
+    d, across, s0, s1, a0, a1 = boxes[fi]
+    fl = flights[fi]
+    # the cut between the last tread below it and the first above, by height
+    lo_k = [k for k in fl.treads if heights[k] <= st.cut_height]
+    c_hi = np.asarray(st.treads[first].polygon.centroid.coords[0]) @ d
+    if lo_k:
+        c_lo = np.asarray(st.treads[lo_k[-1]].polygon.centroid.coords[0]) @ d
+        h_lo, h_hi = heights[lo_k[-1]], heights[first]
+        u = c_lo + (c_hi - c_lo) * (st.cut_height - h_lo) / max(h_hi - h_lo, 1e-6)
+    else:
+        u = s0 if first in fl.treads else s1
+    width = a1 - a0
+    slant = _CUT_SLANT * width
+    u0 = u - 0.5 * slant
+
+    def on_line(a_: float) -> float:  # s of the slanted line at across-coordinate a_
+        return u0 + (a_ - a0) / max(width, 1e-6) * slant
+
+    # from a little beyond one stringer to beyond the other, with a zig-zag mid-way
+    ext = 0.05
+    p0 = d * on_line(a0 - ext) + across * (a0 - ext)
+    p1 = d * on_line(a1 + ext) + across * (a1 + ext)
+    v = p1 - p0
+    perp = np.array([-v[1], v[0]]) / (np.linalg.norm(v) or 1.0)
+    z = _CUT_ZIGZAG_M
+    cut = np.array([p0, p0 + 0.44 * v, p0 + 0.5 * v + perp * z, p0 + 0.5 * v - perp * z, p0 + 0.56 * v, p1])
+    # above the cut: beyond the line in this flight, and every tread or flight after it
+    far = 1e3
+    half = shapely.Polygon(
+        [d * on_line(a0 - 1) + across * (a0 - 1), d * on_line(a1 + 1) + across * (a1 + 1), d * far + across * (a1 + 1), d * far + across * (a0 - 1)]
+    )
+    flight_poly = shapely.Polygon([d * s0 + across * a0, d * s1 + across * a0, d * s1 + across * a1, d * s0 + across * a1]).buffer(0.03)
+    parts = [flight_poly.intersection(half)]
+    later = [i for i in range(len(flights)) if i > fi]
+    for i in later:
+        dd, aa, t0, t1, b0, b1 = boxes[i]
+        parts.append(shapely.Polygon([dd * t0 + aa * b0, dd * t1 + aa * b0, dd * t1 + aa * b1, dd * t0 + aa * b1]).buffer(0.03))
+    for j, tr in enumerate(st.treads):
+        if tr.landing and (j >= first):
+            d_l = boxes[fi][0]
+            e0, e1, f0, f1 = _frame_extent(tr.polygon, d_l)
+            aa = np.array([-d_l[1], d_l[0]])
+            parts.append(shapely.Polygon([d_l * e0 + aa * f0, d_l * e1 + aa * f0, d_l * e1 + aa * f1, d_l * e0 + aa * f1]).buffer(0.03))
+    high = shapely.union_all(parts)
+    # a later flight passing beside the first (a U) is above the cut only where it is higher:
+    # the first flight's part below the cut stays visible
+    low_part = flight_poly.difference(half)
+    if later:
+        high = high.difference(low_part.buffer(-0.01))
+    return cut, high
 
 
 #: Openings are cut this far beyond each face of their wall (m), so that no sliver of the

@@ -1,10 +1,35 @@
 """Drawings: plans at a stated scale and diagnostic figures, rendered to bytes (writing them is
-:mod:`meshplan.export`'s job)."""
+:mod:`meshplan.export`'s job).
+
+The names below are loaded when first used (PEP 562): :mod:`meshplan.options` reads
+:class:`RenderParams` to list the defaults of ``meshplan run --help``, and should not import the
+drawing code (and with it the plan and wall stages) to do so.
+"""
+
+from __future__ import annotations
+
+from importlib import import_module
+from typing import TYPE_CHECKING, Any
 
 from .params import RenderParams
-from .plans import drafting_figure, pen_and_ink_figure, pen_and_ink_raster, segments_figure
-from .plots import levels_figure, normals_figure
-from .sheet import Sheet, figure_bytes, make_sheet
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .plans import drafting_figure, pen_and_ink_figure, pen_and_ink_raster, segments_figure
+    from .plots import levels_figure, normals_figure
+    from .sheet import Sheet, figure_bytes, make_sheet
+
+#: Where each lazily loaded name lives (a submodule of this package).
+_LAZY = {
+    "drafting_figure": "plans",
+    "pen_and_ink_figure": "plans",
+    "pen_and_ink_raster": "plans",
+    "segments_figure": "plans",
+    "levels_figure": "plots",
+    "normals_figure": "plots",
+    "Sheet": "sheet",
+    "figure_bytes": "sheet",
+    "make_sheet": "sheet",
+}
 
 __all__ = [
     "RenderParams",
@@ -18,3 +43,16 @@ __all__ = [
     "pen_and_ink_raster",
     "segments_figure",
 ]
+
+
+def __getattr__(name: str) -> Any:
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(import_module(f".{module}", __name__), name)
+    globals()[name] = value  # once loaded, an ordinary attribute
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY))

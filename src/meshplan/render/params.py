@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass
 from typing import ClassVar
 
-from ..validation import AnyOf, Boolean, Constraint, Integer, Real, validated
+from ..validation import AnyOf, Boolean, Constraint, Integer, Options, Real, validated
 
 #: Drawing scales meshplan chooses from (1:n), so that a plan prints between about 12 and 40 cm.
 STANDARD_SCALES = (20, 50, 100, 200, 500, 1000, 2000)
@@ -22,6 +22,29 @@ MAX_SCALE = 100_000
 #: Resolution bounds in dots per inch: below 30 text is unreadable; above 1200 (a photo printer's
 #: resolution) the raster grows as the square of the dpi without anything more to see.
 MIN_DPI, MAX_DPI = 30, 1200
+
+#: Standard paper sizes (portrait width x height, inches): ISO 216 A4-A0 (210 x 297 mm ...
+#: 841 x 1189 mm), ANSI A (Letter) and B (Tabloid), ARCH D. Each is used in landscape or portrait,
+#: whichever holds the plan (landscape first).
+PAPER_SIZES_IN: dict[str, tuple[float, float]] = {
+    "A4": (210 / 25.4, 297 / 25.4),
+    "A3": (297 / 25.4, 420 / 25.4),
+    "A2": (420 / 25.4, 594 / 25.4),
+    "A1": (594 / 25.4, 841 / 25.4),
+    "A0": (841 / 25.4, 1189 / 25.4),
+    "Letter": (8.5, 11.0),
+    "Tabloid": (11.0, 17.0),
+    "ANSI-B": (11.0, 17.0),
+    "Arch-D": (24.0, 36.0),
+}
+#: The sizes ``--sheet auto`` picks from, smallest first: ISO for metric sheets, US sizes for
+#: imperial ones (the paper a reader of that unit system has).
+AUTO_PAPER_METRIC = ("A4", "A3", "A2", "A1", "A0")
+AUTO_PAPER_IMPERIAL = ("Letter", "Tabloid", "Arch-D")
+#: ``sheet`` values besides the paper names: ``fit`` a page fitted around the drawing (its
+#: margins and the strip below it; the behaviour before standard sizes), ``auto`` the smallest
+#: standard size that holds it.
+SHEET_CHOICES = ("fit", "auto", *PAPER_SIZES_IN)
 
 #: Most drawing processes: each is a forked copy of the run (with the scan in memory); more than
 #: the cores only wait, and 64 is more cores than meshplan's machines have.
@@ -49,6 +72,12 @@ class RenderParams:
     processes
         Worker processes that draw the plans and build the models in parallel (Linux, forked);
         0 is one per core, at most 4; 1 draws everything in the main process.
+    sheet
+        Paper of the drawings: ``fit`` (a page fitted around the plan), ``auto`` (the smallest
+        of :data:`AUTO_PAPER_METRIC` or, imperial, :data:`AUTO_PAPER_IMPERIAL` that holds the plan at its
+        scale) or a size of :data:`PAPER_SIZES_IN` (A4 ... A0, Letter, Tabloid, ANSI-B, Arch-D).
+        With a named size and the automatic scale the scale is the automatic one, or the next
+        smaller standard scale that fits the paper.
     """
 
     _parameter_constraints: ClassVar[dict[str, Constraint]] = {
@@ -62,6 +91,7 @@ class RenderParams:
         ),
         "dpi": Integer(MIN_DPI, MAX_DPI, why="below 30 dpi text is unreadable; above 1200 the raster only grows"),
         "processes": Integer(0, MAX_PROCESSES, why="each process is a copy of the run; more than the cores only wait"),
+        "sheet": Options(SHEET_CHOICES),
     }
 
     opacity: float = 0.5
@@ -69,6 +99,7 @@ class RenderParams:
     scale: int = 0
     dpi: int = 150
     processes: int = 0
+    sheet: str = "fit"
 
     def to_dict(self) -> dict:
         return asdict(self)

@@ -40,6 +40,10 @@ DIM_COLOR = "#3d3d3d"
 DIM_TEXT_PT = 5.5
 DIM_FIRST_MM = 8.0
 DIM_STEP_MM = 6.0
+#: Ticks of a dimension chain closer than this on paper (mm) are one: a 2 mm piece is a wall
+#: corner seen twice (a face and its neighbour's end 4-9 cm apart at 1:50), too short for its
+#: own text (5.5 pt figures are 4 mm wide) and no measure a builder sets out.
+DIM_TICK_MERGE_MM = 2.0
 #: Room labels from this size down to the last, the largest that fits the room.
 ROOM_LABEL_SIZES = (7.5, 6.5, 5.5, 4.5)
 ROOM_TINT = "#f3f1ec"
@@ -50,6 +54,15 @@ ROOM_TINTS = {"room": "#f5f2ea", "corridor": "#e9ecef", "stair": "#e3ecf5", "clo
 #: in this colour, as RoomPlan draws what it is unsure of, so that a reader checks them.
 LOW_CONFIDENCE_COLOR = "#c0392b"
 LOW_CONFIDENCE_DASH = (0, (4, 2.5))
+#: Saturated colours for wall segments (no greys: grey marks the segments that were dropped).
+#: Stairs: tread lines a little lighter than the walls; the walking line's arrow head and the
+#: dot at its foot in paper millimetres (the same size whatever the scale).
+STAIR_COLOR = "#262626"
+STAIR_ARROW_MM = (2.6, 1.7)  # length, width
+STAIR_DOT_MM = 1.3
+STAIR_HIDDEN_DASH = (0, (3, 2))
+VOID_DASH = (0, (6, 2, 1, 2))  # dash-dot: the edge of a hole in the floor
+STAIR_TEXT_PT = 5.0
 #: Saturated colours for wall segments (no greys: grey marks the segments that were dropped).
 SEGMENT_COLORS = (
     "#e6194b", "#3cb44b", "#4363d8", "#f58231", "#911eb4", "#42d4f4", "#f032e6", "#9a6324",
@@ -138,6 +151,7 @@ def drafting_figure(
     if isinstance(plan, MarkedDrafting):
         _draw_low_confidence(ax, plan)
     lines: list = []
+    stair_lines: list = []
     if symbols is not None:
         legend += _draw_rooms(ax, symbols)
         wall_lines, handles = _draw_wall_solids(ax, symbols)
@@ -148,6 +162,9 @@ def drafting_figure(
             legend.append((_door_handle(), "door (leaf and swing)"))
         if len(symbols.windows):
             legend.append((Line2D([], [], color=WINDOW_COLOR, lw=0.5), "window"))
+        # room labels may sit over a stair's treads (on their halo), nothing else may
+        stair_lines, handles = _draw_stairs(ax, symbols, sheet)
+        legend += handles
     lines += annotation_obstacles(annotations.positions, annotations.directions)
     placer = None
     if symbols is not None:
@@ -155,6 +172,9 @@ def drafting_figure(
         lines += chain_texts.lines
         placer = Placer(fig, ax, lines)
         _place_room_labels(ax, symbols, params, placer)
+        for g in stair_lines:
+            placer.add_line(g)
+        _place_stair_texts(ax, symbols, placer)
         chain_texts.place(placer)
         _place_room_dimensions(ax, symbols, sheet, params, placer)
     marks = draw_annotations(ax, annotations.labels, annotations.kinds, annotations.positions, annotations.directions, placer=placer, legend=False)
@@ -251,7 +271,8 @@ def _draw_rooms(ax, symbols: PlanSymbols) -> list:
 
 def _place_room_labels(ax, symbols: PlanSymbols, params: RenderParams, placer: Placer) -> None:
     """Each room's name, number and area at its pole of inaccessibility, as large as fits in
-    the room (7.5 to 4.5 points), else name and number only, else moved within the room."""
+    the room (7.5 to 4.5 points), else name and number only, else the name only (never the
+    number alone, which reads as a dimension), else moved within the room."""
     import shapely
 
     outlines = [shapely.Polygon(r) for r in symbols.room_outlines]
@@ -262,7 +283,8 @@ def _place_room_labels(ax, symbols: PlanSymbols, params: RenderParams, placer: P
         area = format_area(lab.area, params.imperial) if lab.area else ""
         number = plain_text(lab.number)
         full = f"{name}\n{number + '  ' if number else ''}{area}" if area else name
-        texts = [full, f"{name}\n{number}" if number else name, number or name]
+        # never the number alone: "0.02" on a plan reads as a dimension
+        texts = list(dict.fromkeys([full, f"{name}\n{number}" if number else name, name]))
         spots = [lab.position]
         if room is not None and inside is not None and not inside.is_empty:
             spots += _inner_points(inside, lab.position)
@@ -299,13 +321,105 @@ def _inner_points(poly, first, n: int = 14) -> list:
     return [tuple(map(float, p)) for p in g[np.argsort(-depth)][:n]]
 
 
+# --- stairs ------------------------------------------------------------------------------------
+
+
+def _draw_stairs(ax, symbols: PlanSymbols, sheet: Sheet) -> tuple[list, list]:
+    """The stairs of the story with the usual symbol (:class:`meshplan.plan.symbols.StairSymbol`):
+    treads and stringers, the part above the cut dashed, the break line at the cut, the walking
+    line from a dot at its foot to the arrow of ascent, and on the upper story the void outlined
+    dash-dotted and crossed. Returns the lines (for texts to avoid) and the legend entries."""
+    import shapely
+    from matplotlib.collections import LineCollection
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Circle, Polygon
+
+    if not symbols.stairs:
+        return [], []
+    mm = sheet.scale / 1000.0
+    solid: list = []
+    hidden: list = []
+    cuts, walks, walks_hidden, voids, crosses = [], [], [], [], []
+    out: list = []
+    for st in symbols.stairs:
+        solid += list(st.lines)
+        hidden += list(st.hidden)
+        if len(st.cut) >= 2:
+            cuts.append(st.cut)
+        if len(st.walk) >= 2:
+            walks.append(st.walk)
+        if len(st.walk_hidden) >= 2:
+            walks_hidden.append(st.walk_hidden)
+        if len(st.void) >= 4:
+            voids.append(st.void)
+        crosses += list(st.cross)
+        # the arrow head at the top of the walking line, pointing up the stair
+        ends = [w for w in (st.walk_hidden, st.walk) if len(w) >= 2]
+        if ends:
+            tip = np.asarray(ends[0][-1])
+            d = np.asarray(st.arrow)
+            across = np.array([-d[1], d[0]])
+            length, width = (v * mm for v in STAIR_ARROW_MM)
+            head = [tip, tip - d * length + across * 0.5 * width, tip - d * length - across * 0.5 * width]
+            ax.add_patch(Polygon(head, closed=True, facecolor=STAIR_COLOR, edgecolor="none", zorder=6))
+            out.append(shapely.Polygon(head))
+        if len(st.walk) >= 2 and st.role == "lower":
+            ax.add_patch(Circle(tuple(st.walk[0]), 0.5 * STAIR_DOT_MM * mm, facecolor="white", edgecolor=STAIR_COLOR, lw=0.5, zorder=6))
+    kw: dict[str, Any] = dict(colors=STAIR_COLOR, zorder=2.8)
+    if solid:
+        ax.add_collection(LineCollection(solid, linewidths=0.4, **kw))
+    if hidden:
+        ax.add_collection(LineCollection(hidden, linewidths=0.35, linestyles=STAIR_HIDDEN_DASH, **kw))
+    if cuts:
+        ax.add_collection(LineCollection(cuts, linewidths=0.6, **kw))
+    if crosses:
+        ax.add_collection(LineCollection(crosses, linewidths=0.25, **kw))
+    if walks:
+        ax.add_collection(LineCollection(walks, linewidths=0.45, zorder=5.5, colors=STAIR_COLOR))
+    if walks_hidden:
+        ax.add_collection(LineCollection(walks_hidden, linewidths=0.45, linestyles=STAIR_HIDDEN_DASH, zorder=5.5, colors=STAIR_COLOR))
+    if voids:
+        ax.add_collection(LineCollection(voids, linewidths=0.7, linestyles=VOID_DASH, **kw))
+    out += [shapely.LineString(seg) for seg in (*solid, *hidden, *crosses)]
+    out += [shapely.LineString(c) for c in (*cuts, *walks, *walks_hidden, *voids)]
+    legend = [(Line2D([0, 1], [0, 0], color=STAIR_COLOR, lw=0.45, marker=">", markersize=3.5, markevery=[-1]), "stair: walking line, arrow up")]
+    if hidden:
+        legend.append((Line2D([], [], color=STAIR_COLOR, lw=0.35, ls=STAIR_HIDDEN_DASH), "stair above the cut"))
+    if voids:
+        legend.append((Line2D([], [], color=STAIR_COLOR, lw=0.7, ls=VOID_DASH), "void in the floor (over a stair)"))
+    return out, legend
+
+
+def _place_stair_texts(ax, symbols: PlanSymbols, placer: Placer) -> None:
+    """Each stair's risers, rise and going beside the foot of its walking line (lower story),
+    where it covers nothing; else left out."""
+    for st in symbols.stairs:
+        if st.role != "lower" or len(st.walk) < 2:
+            continue
+        foot = np.asarray(st.walk[0])
+        d = np.asarray(st.walk[1]) - foot
+        d = d / (np.linalg.norm(d) or 1.0)
+        across = np.array([-d[1], d[0]])
+        spots = [foot - d * 0.3, foot - d * 0.3 + across * 0.3, foot - d * 0.3 - across * 0.3, foot + d * 0.6]
+        candidates = [(float(p[0]), float(p[1])) for p in spots]
+
+        def make(c, text=st.text):
+            t = ax.text(c[0], c[1], text, ha="center", va="center", fontsize=STAIR_TEXT_PT, color=STAIR_COLOR, zorder=12, **PLAIN_TEXT_KW)
+            return tag(with_halo(t, 1.5), "stair-label")
+
+        def spec(c, text=st.text):
+            return Spot(c[0], c[1], text, STAIR_TEXT_PT)
+
+        placer.place(make, candidates, spec=spec)
+
+
 # --- dimensions --------------------------------------------------------------------------------
 
 
 class _ChainTexts:
     """The chains' lines (drawn at once) and their texts (placed once the room labels are)."""
 
-    def __init__(self):
+    def __init__(self) -> None:
         self.lines: list = []
         self.texts: list = []  # (make, candidates, spec)
 
@@ -317,6 +431,42 @@ class _ChainTexts:
 def _dimension_text(ax, x, z, text, rotation, ha, va):
     t = ax.text(x, z, text, fontsize=DIM_TEXT_PT, color=DIM_COLOR, ha=ha, va=va, rotation=rotation, rotation_mode="anchor", zorder=11)
     return tag(t, "dimension")
+
+
+def merge_ticks(ticks, gap: float, prefer=()) -> np.ndarray:
+    """``ticks`` (sorted) with each run of ticks closer than ``gap`` to the next made one: the
+    chain's first or last tick where the run holds it (the overall size stays), else a tick of
+    ``prefer`` (the coarser chain's, so that the chains agree), else the run's middle tick."""
+    t = np.sort(np.asarray(ticks, dtype=np.float64))
+    if len(t) < 2:
+        return t
+    prefer = np.asarray(prefer, dtype=np.float64)
+    runs = np.split(t, np.flatnonzero(np.diff(t) >= gap) + 1)
+    out = []
+    for run in runs:
+        if run[0] == t[0]:
+            out.append(t[0])
+        elif run[-1] == t[-1]:
+            out.append(t[-1])
+        else:
+            shared = [u for u in run if len(prefer) and np.min(np.abs(prefer - u)) < 1e-9]
+            out.append(shared[0] if shared else run[(len(run) - 1) // 2])
+    return np.asarray(out)
+
+
+def _merged_chains(chains, gap: float) -> list:
+    """The chains of one side, nearest the building first, each with its ticks merged
+    (:func:`merge_ticks`, coarser chains first so that finer ones keep their ticks); a chain
+    left measuring nothing the next coarser one does not is dropped."""
+    kept: list = []
+    coarser = np.zeros(0)
+    for c in sorted(chains, key=lambda c: -c.tier):
+        t = merge_ticks(c.ticks, gap, coarser)
+        if len(t) < 2 or (len(coarser) and len(t) <= len(coarser)):
+            continue
+        kept.append((c, t))
+        coarser = t
+    return sorted(kept, key=lambda ct: ct[0].tier)
 
 
 def _chain_geometry(ax, symbols: PlanSymbols, sheet: Sheet, params: RenderParams) -> _ChainTexts:
@@ -333,13 +483,13 @@ def _chain_geometry(ax, symbols: PlanSymbols, sheet: Sheet, params: RenderParams
     for c in symbols.chains:
         sides.setdefault((c.axis, c.outward), []).append(c)
     for (axis, outward), chains in sorted(sides.items()):
-        for rank, c in enumerate(sorted(chains, key=lambda c: c.tier)):
+        merged = _merged_chains(chains, DIM_TICK_MERGE_MM * mm)
+        for rank, (c, t) in enumerate(merged):
             at = c.base + outward * (DIM_FIRST_MM + DIM_STEP_MM * rank) * mm
 
             def pt(u, v, axis=axis):
                 return (u, v) if axis == 0 else (v, u)
 
-            t = np.asarray(c.ticks)
             segs.append([pt(t[0] - 1.5 * mm, at), pt(t[-1] + 1.5 * mm, at)])
             for u in t:
                 segs.append([pt(u, c.base + outward * 2.0 * mm), pt(u, at + outward * 1.5 * mm)])

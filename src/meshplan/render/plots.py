@@ -9,33 +9,70 @@ from ..orient import Orientation
 from ..sphere import to_spherical
 from .params import RenderParams
 
+#: Room (inches) left of the histogram for the height axis, and right of the level labels.
+_LEVELS_LEFT_IN = 0.75
+_LEVELS_RIGHT_PAD_IN = 0.12
+#: The peaks of the histogram, the candidate levels the floors and ceilings were chosen from.
+PEAK_COLOR = "#d62728"
+
 
 def levels_figure(orientation: Orientation, params: RenderParams):
     """The area-weighted histogram of near-horizontal face heights, with the floors and
-    ceilings found (paper, Fig. "histogram-horizontal")."""
+    ceilings found (paper, Fig. "histogram-horizontal"): each floor and ceiling a dashed line
+    labelled at the right of the plot (dotted where a ceiling was assumed), each peak of the
+    histogram (a candidate level: :class:`meshplan.orient.levels.Spike`) a red marker at the tip
+    of its bar, all in the legend. The plot is as wide as its labels leave room for."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
+    from matplotlib.lines import Line2D
 
     lv = orientation.levels
     unit, name = (0.3048, "ft") if params.imperial else (1.0, "m")
-    fig = Figure(figsize=(7.5, 4.5), dpi=150)
-    ax = fig.add_axes((0.1, 0.11, 0.58, 0.8))
+    fw, fh = 7.5, 4.5
+    fig = Figure(figsize=(fw, fh), dpi=150)
+    ax = fig.add_axes((_LEVELS_LEFT_IN / fw, 0.11, 0.8, 0.8))
     centres = 0.5 * (lv.edges[:-1] + lv.edges[1:])
     ax.barh(centres / unit, lv.weights, height=np.diff(lv.edges) / unit, color="#7f7f7f", linewidth=0)
     xmax = float(lv.weights.max()) if len(lv.weights) else 1.0
+    labels = []
+    to_right = ax.get_yaxis_transform()  # x in axes fractions, y in heights
+    assumed = False
     for s in orientation.stories:
         ax.axhline(s.floor / unit, color="#2ca02c", lw=1.2, ls="--")
-        ax.text(xmax * 1.02, s.floor / unit, f"story {s.index} floor {s.floor / unit:.2f} {name}", color="#2ca02c", fontsize=7, va="center")
+        floor = f"story {s.index} floor {s.floor / unit:.2f} {name}"
+        labels.append(ax.text(1.01, s.floor / unit, floor, color="#2ca02c", fontsize=7, va="center", transform=to_right))
         style = "--" if s.ceiling_found else ":"
+        assumed |= not s.ceiling_found
         ax.axhline(s.ceiling / unit, color="#1f77b4", lw=1.2, ls=style)
         label = f"story {s.index} ceiling {s.ceiling / unit:.2f} {name}" + ("" if s.ceiling_found else " (assumed)")
-        ax.text(xmax * 1.02, s.ceiling / unit, label, color="#1f77b4", fontsize=7, va="center")
-    for sp in lv.spikes:
-        ax.plot([sp.weight / 2], [sp.height / unit], marker="<", color="#d62728", ms=4)  # pair weight spans two buckets
+        labels.append(ax.text(1.01, s.ceiling / unit, label, color="#1f77b4", fontsize=7, va="center", transform=to_right))
+    if len(lv.spikes) and len(lv.weights):
+        # at the tip of the tallest bar within a bucket of the peak's (refined) height
+        tips = []
+        for sp in lv.spikes:
+            near = np.abs(centres - sp.height) <= np.diff(lv.edges).max() * 1.01
+            tips.append(float(lv.weights[near].max()) if near.any() else 0.0)
+        ax.plot(tips, [sp.height / unit for sp in lv.spikes], linestyle="none", marker="<", color=PEAK_COLOR, ms=4, zorder=3)
+    handles = [Line2D([], [], color="#2ca02c", lw=1.2, ls="--"), Line2D([], [], color="#1f77b4", lw=1.2, ls="--")]
+    names = ["floor found", "ceiling found"]
+    if assumed:
+        handles.append(Line2D([], [], color="#1f77b4", lw=1.2, ls=":"))
+        names.append("ceiling assumed (none found)")
+    if len(lv.spikes):
+        handles.append(Line2D([], [], color=PEAK_COLOR, marker="<", ms=4, ls="none"))
+        names.append("histogram peak: a candidate level")
+    # above the plot, right of the title: inside it would cover a level at the top
+    ax.legend(handles, names, loc="lower right", bbox_to_anchor=(1.0, 1.0), ncol=2, fontsize=6, frameon=False, borderaxespad=0.2)
     ax.set_xlabel("area of near-horizontal faces per 2-inch bucket (m²)", fontsize=8)
     ax.set_ylabel(f"height ({name})", fontsize=8)
-    ax.set_title("Altitude histogram: floors and ceilings", fontsize=9)
+    ax.set_title("Altitude histogram: floors and ceilings", fontsize=9, loc="left")
     ax.tick_params(labelsize=7)
     ax.set_xlim(0, xmax * 1.05 if xmax > 0 else 1)
+    # as wide as the labels at the right leave room for
+    renderer = FigureCanvasAgg(fig).get_renderer()
+    widest = max((t.get_window_extent(renderer).width for t in labels), default=0.0) / fig.dpi
+    right = widest + 0.01 * 0.8 * fw + _LEVELS_RIGHT_PAD_IN
+    ax.set_position((_LEVELS_LEFT_IN / fw, 0.11, 1.0 - (_LEVELS_LEFT_IN + right) / fw, 0.8))
     return fig
 
 

@@ -16,7 +16,7 @@ import numpy as np
 from ..geometry import ANNOTATION_PROBE_M
 from ..units import FOOT_M, INCH_M
 from ..validation import PLAIN_TEXT_KW, plain_text
-from .params import STANDARD_SCALES, RenderParams
+from .params import AUTO_PAPER_IMPERIAL, AUTO_PAPER_METRIC, PAPER_SIZES_IN, STANDARD_SCALES, RenderParams
 
 if TYPE_CHECKING:
     from matplotlib.typing import RcKeyType
@@ -57,6 +57,9 @@ class Sheet:
         1:``scale``: one metre of model is ``1/scale`` metres of paper.
     dpi
         Raster resolution (pixels per inch of paper).
+    paper, page_in
+        The standard paper (``A3``, ``Letter`` ...) and its page (width, height in inches, in
+        the orientation used); ``""`` and ``None`` for a page fitted around the drawing.
     """
 
     xmin: float
@@ -65,6 +68,13 @@ class Sheet:
     zmax: float
     scale: int
     dpi: int
+    paper: str = ""
+    page_in: tuple[float, float] | None = None
+
+    @property
+    def drawing_in(self) -> tuple[float, float]:
+        """Width and height of the drawing on paper (inches)."""
+        return self.width_m / self.scale / INCH_M, self.depth_m / self.scale / INCH_M
 
     @property
     def width_m(self) -> float:
@@ -107,12 +117,64 @@ def make_sheet(points_xz: np.ndarray, params: RenderParams, margin_m: float = 0.
             f"scale 1:{scale} draws this {longest:.0f} m story on a {longest / scale:.1f} m page (at most {MAX_PAGE_M:g} m)",
             f"pass --scale {fits} or larger, or 0 for the automatic scale",
         )
+    paper, page = "", None
+    if params.sheet != "fit":
+        scale, paper, page = _paper(lo, hi, scale, params)
     # room outside the building for the dimension chains, in paper millimetres at this scale
     lo, hi = lo - DIMENSION_MARGIN_PAPER_M * scale, hi + DIMENSION_MARGIN_PAPER_M * scale
     longest = float(max(hi - lo))
     # huge sheets (a forced small scale) get fewer dots per inch rather than exhaust memory
     dpi = min(params.dpi, max(30, int(_MAX_PIXELS * scale * INCH_M / longest)))
-    return Sheet(float(lo[0]), float(hi[0]), float(lo[1]), float(hi[1]), int(scale), dpi)
+    return Sheet(float(lo[0]), float(hi[0]), float(lo[1]), float(hi[1]), int(scale), dpi, paper, page)
+
+
+def _fits(extent_m: np.ndarray, scale: int, page: tuple[float, float]) -> bool:
+    """Whether a model extent (without the dimension margin) drawn at 1:``scale`` fits the page
+    inside its margins and above its strip."""
+    w, h = (extent_m + 2 * DIMENSION_MARGIN_PAPER_M * scale) / scale / INCH_M
+    left, right, top, bottom = _MARGINS_IN
+    return page[0] >= _MIN_PAGE_W_IN and w + left + right <= page[0] and h + top + bottom <= page[1]
+
+
+def _orientations(name: str) -> list[tuple[float, float]]:
+    """A paper's pages, landscape first."""
+    a, b = sorted(PAPER_SIZES_IN[name])
+    return [(b, a), (a, b)]
+
+
+def _paper(lo: np.ndarray, hi: np.ndarray, scale: int, params: RenderParams) -> tuple[int, str, tuple[float, float]]:
+    """The scale, paper and page of a standard sheet (``params.sheet``) for a model extent: for
+    ``auto`` the smallest paper that holds the drawing at the scale; for a named paper with the
+    automatic scale the automatic scale or the next smaller standard one that fits it.
+
+    Raises
+    ------
+    ParameterError
+        When a named paper cannot hold the drawing at the scale asked for (or at any standard
+        scale), or no standard paper holds it for ``auto``.
+    """
+    from ..errors import ParameterError
+
+    extent = np.asarray(hi - lo, dtype=np.float64)
+    if params.sheet == "auto":
+        names = AUTO_PAPER_IMPERIAL if params.imperial else AUTO_PAPER_METRIC
+        for name in names:
+            for page in _orientations(name):
+                if _fits(extent, scale, page):
+                    return scale, name, page
+        raise ParameterError(
+            f"the plan at 1:{scale} fits none of the papers {', '.join(names)}", "pass a smaller scale (a larger --scale N), or --sheet fit"
+        )
+    name = params.sheet
+    scales = [scale] if params.scale else [s for s in STANDARD_SCALES if s >= scale]
+    for s in scales:
+        for page in _orientations(name):
+            if _fits(extent, s, page):
+                return s, name, page
+    raise ParameterError(
+        f"the plan does not fit on {name} at 1:{scales[0]}" + ("" if params.scale else " or any smaller standard scale"),
+        "pass a larger paper, --sheet auto, or a larger --scale N",
+    )
 
 
 def new_figure(sheet: Sheet, title: str, params: RenderParams):
@@ -120,12 +182,17 @@ def new_figure(sheet: Sheet, title: str, params: RenderParams):
     from matplotlib.figure import Figure
     from matplotlib.ticker import FuncFormatter
 
-    w_in = sheet.width_m / sheet.scale / INCH_M
-    h_in = sheet.depth_m / sheet.scale / INCH_M
+    w_in, h_in = sheet.drawing_in
     left, right, top, bottom = _MARGINS_IN
-    fw, fh = max(w_in + left + right, _MIN_PAGE_W_IN), h_in + top + bottom
+    if sheet.page_in is None:
+        fw, fh = max(w_in + left + right, _MIN_PAGE_W_IN), h_in + top + bottom
+        x0, y0 = left, bottom
+    else:  # a standard paper: the drawing centred in the room above the strip
+        fw, fh = sheet.page_in
+        x0 = left + 0.5 * max(fw - left - right - w_in, 0.0)
+        y0 = bottom + 0.5 * max(fh - top - bottom - h_in, 0.0)
     fig = Figure(figsize=(fw, fh), dpi=sheet.dpi)
-    ax = fig.add_axes((left / fw, bottom / fh, w_in / fw, h_in / fh))
+    ax = fig.add_axes((x0 / fw, y0 / fh, w_in / fw, h_in / fh))
     ax.set_zorder(2)  # the plan's lines and texts above a raster placed on the figure
     ax.set_xlim(sheet.xmin, sheet.xmax)
     ax.set_ylim(sheet.zmax, sheet.zmin)  # z down the page
@@ -150,7 +217,7 @@ def new_figure(sheet: Sheet, title: str, params: RenderParams):
     fig.text(
         left / fw,
         1 - 0.36 / fh,
-        f"Scale 1:{sheet.scale} on a {fw:.1f} x {fh:.1f} in page",
+        f"Scale 1:{sheet.scale} on {_paper_name(sheet)}",
         fontsize=6,
         va="top",
         ha="left",
@@ -159,14 +226,36 @@ def new_figure(sheet: Sheet, title: str, params: RenderParams):
     return fig, ax
 
 
+def _paper_name(sheet: Sheet) -> str:
+    """``A3 landscape (420 x 297 mm)``, ``Letter portrait (8.5 x 11 in)``, or the fitted page."""
+    if sheet.page_in is None:
+        w, h = sheet.drawing_in
+        left, right, top, bottom = _MARGINS_IN
+        return f"a {max(w + left + right, _MIN_PAGE_W_IN):.1f} x {h + top + bottom:.1f} in page"
+    w, h = sheet.page_in
+    way = "landscape" if w > h else "portrait"
+    if sheet.paper.startswith("A"):
+        return f"{sheet.paper} {way} ({w * 25.4:.0f} x {h * 25.4:.0f} mm)"
+    return f"{sheet.paper} {way} ({w:g} x {h:g} in)"
+
+
 def place_raster(fig, ax, rgba: np.ndarray) -> None:
     """Put a raster made at the sheet's pixel size over the axes, pixel for pixel (no
     resampling: the raster is exactly what the PNG shows)."""
+    from .raster import SheetImage
+
     dpi = fig.dpi
     pos = ax.get_position()
     h_px = pos.height * fig.get_figheight() * dpi
     x0, y0 = pos.x0 * fig.get_figwidth() * dpi, pos.y0 * fig.get_figheight() * dpi
-    fig.figimage(rgba, xo=int(round(x0)), yo=int(round(y0 + h_px - rgba.shape[0])), origin="upper", zorder=1)
+    # what Figure.figimage does, with an image that skips the resampling (see .raster)
+    im = SheetImage(fig, offsetx=int(round(x0)), offsety=int(round(y0 + h_px - rgba.shape[0])), origin="upper", zorder=1)
+    im.set_array(rgba)
+    im.set_alpha(None)
+    im.set_clim(None, None)
+    fig.images.append(im)
+    im._remove_method = fig.images.remove  # type: ignore[attr-defined]  # an Artist attribute the stubs omit
+    fig.stale = True
 
 
 def nice_length(target: float) -> float:
@@ -411,13 +500,18 @@ def draw_annotations(ax, labels, kinds, positions, directions, probe_m: float = 
     return list(zip(handles, names))
 
 
+#: Slices counted at once per pixel, one bit each of a 64-bit word (:func:`rasterize_segments`).
+_LEVELS_PER_WORD = 64
+
+
 def rasterize_segments(segments: np.ndarray, level: np.ndarray, sheet: Sheet) -> np.ndarray:
     """``(rows, cols)`` number of distinct slices whose segments cross each pixel.
 
     Segments are sampled at one-pixel steps (the ink is dilated afterwards, so no gap shows);
     a pixel counts each slice once, so a slice's chain of segments does not darken itself where
-    its segments meet. Distinct (pixel, slice) pairs are found by sorting integer keys, which is
-    much faster than hashing them.
+    its segments meet. Each pixel keeps one bit per slice (64 slices to a word, a word array per
+    64 slices), set by an unbuffered OR and counted by a population count: a pass over the
+    samples, where sorting the (pixel, slice) pairs to find the distinct ones cost twice as much.
     """
     rows, cols = sheet.raster_shape
     if not len(segments):
@@ -425,19 +519,23 @@ def rasterize_segments(segments: np.ndarray, level: np.ndarray, sheet: Sheet) ->
     p = sheet.pixel_m
     origin = np.array([sheet.xmin, sheet.zmin])
     a = (segments[:, 0] - origin) / p
-    b = (segments[:, 1] - origin) / p
-    n = np.ceil(np.hypot(*(b - a).T)).astype(np.int64) + 1
+    d = (segments[:, 1] - origin) / p - a
+    n = np.ceil(np.hypot(d[:, 0], d[:, 1])).astype(np.int64) + 1
     seg = np.repeat(np.arange(len(a)), n)
-    t = (np.arange(len(seg)) - np.repeat(np.cumsum(n) - n, n)) / np.repeat(np.maximum(n - 1, 1), n)
-    pts = a[seg] + (b - a)[seg] * t[:, None]
-    c = pts[:, 0].astype(np.int64)
-    r = pts[:, 1].astype(np.int64)
+    t = (np.arange(len(seg)) - (np.cumsum(n) - n)[seg]) / np.maximum(n - 1, 1)[seg]
+    c = (a[seg, 0] + d[seg, 0] * t).astype(np.int64)
+    r = (a[seg, 1] + d[seg, 1] * t).astype(np.int64)
     inside = (c >= 0) & (c < cols) & (r >= 0) & (r < rows)
+    pix = (r * cols + c)[inside]
     lv = np.asarray(level, dtype=np.int64)[seg[inside]]
-    n_levels = int(lv.max()) + 1 if len(lv) else 1
-    key = np.sort((r[inside] * cols + c[inside]) * n_levels + lv)
-    first = np.r_[True, key[1:] != key[:-1]] if len(key) else np.zeros(0, bool)
-    return np.bincount(key[first] // n_levels, minlength=rows * cols).reshape(rows, cols).astype(np.int32)
+    counts = np.zeros(rows * cols, dtype=np.int32)
+    n_levels = int(lv.max()) + 1 if len(lv) else 0
+    for w in range(0, n_levels, _LEVELS_PER_WORD):
+        sel = slice(None) if n_levels <= _LEVELS_PER_WORD else (lv >= w) & (lv < w + _LEVELS_PER_WORD)
+        bits = np.zeros(rows * cols, dtype=np.uint64)
+        np.bitwise_or.at(bits, pix[sel], np.left_shift(np.uint64(1), (lv[sel] - w).astype(np.uint64)))
+        counts += np.bitwise_count(bits)
+    return counts.reshape(rows, cols)
 
 
 def ink_rgba(counts: np.ndarray, opacity: float, color: str = "#14213d", width_px: int = 2) -> np.ndarray:
