@@ -58,6 +58,14 @@ REAL_SCANS = {
 }
 
 
+def real_scan_names(suffixes: tuple[str, ...] = (".ply", ".obj", ".glb", ".stl", ".off", ".usdz")) -> list[str]:
+    """The scans in ../shared/scans with one of ``suffixes`` (the HoloLens 2 plane sidecars
+    left out); empty when ../shared is absent (parametrize with a placeholder that skips)."""
+    if not SCANS.is_dir():
+        return []
+    return sorted(p.name for p in SCANS.iterdir() if p.suffix in suffixes and not p.name.endswith(".su_planes.ply"))
+
+
 def real_scan(name: str) -> Path:
     path = SCANS / name
     if not path.is_file():

@@ -21,7 +21,7 @@ import numpy as np
 import pytest
 from shapely.geometry import Point
 
-from conftest import SCANS
+from conftest import SCANS, real_scan_names
 from meshplan.export.gbxml import energy_model, envelope_summary, gbxml_bytes
 from meshplan.options import ExportParams
 
@@ -285,15 +285,9 @@ def test_missing_extra_is_refused_before_any_work(tmp_path, monkeypatch, capsys,
     assert not (tmp_path / "out").exists()
 
 
-def _real_scans():
-    if not SCANS.is_dir():
-        return []
-    return sorted(p.name for p in SCANS.iterdir() if p.suffix in (".ply", ".obj", ".glb", ".stl", ".off") and not p.name.endswith(".su_planes.ply"))
-
-
 @pytest.mark.realscan
 @pytest.mark.slow
-@pytest.mark.parametrize("name", _real_scans() or ["(no real scans)"])
+@pytest.mark.parametrize("name", real_scan_names((".ply", ".obj", ".glb", ".stl", ".off")) or ["(no real scans)"])
 def test_real_scans_energy_model(name, tmp_path):
     import meshplan
 
