@@ -14,6 +14,9 @@ metres, and the faces that cannot be used are dropped and counted:
 
 Vertices at exactly the same position are merged, so that faces of one surface are connected
 even when an exporter wrote each object with its own vertices.
+
+Why one long module: every format's checks before reading (size, header, memory) and the common
+cleaning after it run in one entry point, :func:`load_mesh`, and share the format tables.
 """
 
 from __future__ import annotations

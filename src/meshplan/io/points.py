@@ -36,6 +36,9 @@ scan's unit, exactly (``LoadStats.scale_to_m`` 0.3048006096 for US survey feet),
 ``--units`` names another than the default ``m``. A vertical unit other than the horizontal one
 scales z on its own. No ``pyproj`` is needed; a CRS given only as an EPSG code, or geographic (in
 degrees), leaves the file in ``--units``.
+
+Why one long module: the point formats' readers, the voxel subsampling, the normal and footprint
+estimation and the splats are one path from a file of points to the mesh every stage reads.
 """
 
 from __future__ import annotations

@@ -26,6 +26,10 @@ Confidence (``high``, ``medium``, ``low``, always with the reason) tells a reade
   by the scanned floor: low;
 * opening: the hole seen in both faces of its wall with wall beside both jambs: high; in one face:
   medium; in none clearly, or sizes outside those of doors and windows: low.
+
+Why one long module: rooms, walls and openings become elements together (an opening's rooms come
+from the rooms, a room's type from its doors, a wall's sides from its rooms), so their rules read
+best side by side.
 """
 
 from __future__ import annotations

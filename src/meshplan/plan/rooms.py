@@ -26,6 +26,9 @@ measured rooms by hand in Rhino).
 
 The room polygon is the net floor area between the inner wall faces; its points run
 counter-clockwise as seen on the plan (x to the right, z down the page).
+
+Why one long module: the arrangement of the extended walls, the floor rasters and the
+classification of its faces are one algorithm whose steps share the story's walls and rasters.
 """
 
 from __future__ import annotations

@@ -5,6 +5,10 @@ A door between two rooms is found on both faces of its wall; it is drawn once, s
 room of the first face found, with jamb lines across the wall. A window is drawn as the usual
 triple line across the wall. Wall thickness comes from the physical walls (see
 :mod:`meshplan.walls.physical`).
+
+Why one long module: the sheet's drawing model (wall solids, openings, labels, dimension chains,
+stairs) is one record that every backend draws (PNG/SVG/PDF and DXF); its builders share the wall
+joins and the sizes in paper millimetres.
 """
 
 from __future__ import annotations

@@ -1,4 +1,8 @@
-"""The plan drawings: pen-and-ink, drafting and DBSCAN wall segments."""
+"""The plan drawings: pen-and-ink, drafting and DBSCAN wall segments.
+
+Why one long module: the three plan drawings (pen-and-ink, drafting, wall segments) share the
+sheet set-up, the text placer and the painters of the plan symbols.
+"""
 
 from __future__ import annotations
 

@@ -3,6 +3,10 @@
 Every plan of a story is drawn on the same :class:`Sheet`, so the pen-and-ink plan, the drafting
 plan and the segment drawing line up when overlaid. Figures are made with matplotlib's object
 API (no pyplot, no global state) and rendered to bytes; writing them is the export stage's job.
+
+Why one long module: the sheet (page, scale, title block, north arrow, scale bar, legend,
+annotations, the raster's placement) is shared by every drawing; its pieces are small and share
+the page's geometry.
 """
 
 from __future__ import annotations
