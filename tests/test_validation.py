@@ -282,7 +282,7 @@ LITERAL = "$x^2$<&> $\\foo$ 50%%c ^J"
 
 def _plan_with_label(label: str):
     from meshplan.orient.stories import Story
-    from meshplan.plan.drafting import DraftingPlan
+    from meshplan.plan.draft import DraftingPlan
     from meshplan.render.params import RenderParams
     from meshplan.render.sheet import make_sheet
     from meshplan.slicing import Slices

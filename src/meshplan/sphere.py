@@ -8,13 +8,16 @@ All functions are vectorized over the directions; nothing loops over triangles i
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy.sparse import csr_matrix
-from scipy.spatial import cKDTree
 
 from .geometry import FloatArray, IntArray, unit
+
+if TYPE_CHECKING:  # pragma: no cover
+    from scipy.sparse import csr_matrix
+    from scipy.spatial import cKDTree
 
 #: The paper's outlier schedule for the wall alignment, in degrees.
 PAPER_TRIM_SCHEDULE_DEG = (50.0, 40.0, 30.0, 20.0, 10.0, 5.0, 3.0)
@@ -150,6 +153,11 @@ def _hemisphere_bins(n: int, radius_deg: float) -> tuple[FloatArray, cKDTree, cs
     sparse matrix summing each bin's axial neighbours within ``radius_deg``."""
     key = (n, radius_deg)
     if key not in _HEMI_CACHE:
+        # scipy loaded here, not at import: the parameter classes (and ``--help``) need only
+        # this module's constants
+        from scipy.sparse import csr_matrix
+        from scipy.spatial import cKDTree
+
         b = fibonacci_sphere(2 * n)
         b = b[b[:, 1] >= 0]
         tree = cKDTree(np.r_[b, -b])

@@ -4,195 +4,69 @@ alignment and stories.
 :func:`orient` finds the rigid transform from the input coordinates to the *plan frame*: +y up
 (against gravity), the largest wall cluster facing +x (so the dominant walls run along x and z),
 metres, with the origin on the lowest floor at the low-x, low-z corner of the scan (0.5 %
-quantiles, so that stray triangles do not move it).
-"""
+quantiles, so that stray triangles do not move it)."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
 
-import numpy as np
+from .._lazy import lazy_exports
 
-from ..errors import GeometryError
-from ..geometry import FloatArray, IntArray, Mesh, homogeneous, rotation_about_y, rotation_between
-from .align import WallAlignment, WallDirection, align_walls
-from .facing import face_components, inward_flips
-from .gravity import GravityEstimate, estimate_gravity, refine_with_slabs
-from .levels import Levels, StoryLevels, find_levels
-from .params import GRAVITY_METHODS, UP_CHOICES, OrientParams
-from .stories import Story, assign_faces, slab_faces, split_stories, without_ceiling
+if TYPE_CHECKING:  # pragma: no cover
+    from .align import WallAlignment, WallDirection, align_walls
+    from .facing import face_components, inward_flips
+    from .gravity import GravityEstimate, estimate_gravity, refine_with_slabs
+    from .levels import Levels, StoryLevels, find_levels
+    from .orientation import Orientation, orient
+    from .params import GRAVITY_METHODS, UP_CHOICES, OrientParams
+    from .stories import Story, assign_faces, slab_faces, split_stories, without_ceiling
+
+#: Where each public name lives (loaded when first used, :mod:`meshplan._lazy`).
+_EXPORTS = {
+    "GRAVITY_METHODS": "params",
+    "GravityEstimate": "gravity",
+    "Levels": "levels",
+    "OrientParams": "params",
+    "Orientation": "orientation",
+    "Story": "stories",
+    "StoryLevels": "levels",
+    "UP_CHOICES": "params",
+    "WallAlignment": "align",
+    "WallDirection": "align",
+    "align_walls": "align",
+    "assign_faces": "stories",
+    "estimate_gravity": "gravity",
+    "face_components": "facing",
+    "find_levels": "levels",
+    "inward_flips": "facing",
+    "orient": "orientation",
+    "refine_with_slabs": "gravity",
+    "slab_faces": "stories",
+    "split_stories": "stories",
+    "without_ceiling": "stories",
+}
 
 __all__ = [
     "GRAVITY_METHODS",
-    "UP_CHOICES",
     "GravityEstimate",
     "Levels",
     "OrientParams",
     "Orientation",
     "Story",
     "StoryLevels",
+    "UP_CHOICES",
     "WallAlignment",
     "WallDirection",
+    "align_walls",
     "assign_faces",
+    "estimate_gravity",
     "face_components",
+    "find_levels",
+    "inward_flips",
     "orient",
+    "refine_with_slabs",
     "slab_faces",
+    "split_stories",
     "without_ceiling",
 ]
-
-#: Largest plausible median triangle size (m): HoloLens and phone scans make 1-10 cm triangles.
-_MAX_TRIANGLE_SIZE_M = 1.0
-
-
-@dataclass(frozen=True)
-class Orientation:
-    """Everything the orientation stage found.
-
-    Attributes
-    ----------
-    transform
-        4x4 rigid transform (det +1) from input coordinates (metres) to the plan frame.
-    gravity
-        The up estimate, in input coordinates.
-    levels
-        The altitude histogram, its spikes and the floor and ceiling heights (plan frame).
-    alignment
-        The wall clustering; its directions are given in the plan frame.
-    stories
-        Floor, ceiling and extent of each story (plan frame).
-    face_story
-        ``(F,)`` story index of every face.
-    flipped
-        ``(F,)`` faces whose winding was reversed so that normals face into the rooms.
-    warnings
-        Things the user should know (no ceiling found, ...).
-    """
-
-    transform: FloatArray
-    gravity: GravityEstimate
-    levels: Levels
-    alignment: WallAlignment
-    stories: tuple[Story, ...]
-    face_story: IntArray
-    flipped: np.ndarray
-    warnings: tuple[str, ...]
-
-    @property
-    def rotation(self) -> FloatArray:
-        return self.transform[:3, :3]
-
-    def wall_directions(self) -> tuple[WallDirection, ...]:
-        return self.alignment.directions
-
-
-def _check_scale(mesh: Mesh, params: OrientParams) -> None:
-    size = float(np.sqrt(2.0 * np.median(mesh.face_areas)))
-    if size > _MAX_TRIANGLE_SIZE_M:
-        lo, hi = mesh.bounds()
-        extent = np.sort(hi - lo)
-        problem = f"implausible scale: the median triangle is {size:.3g} m across"
-        if extent[0] > params.max_story_height_m:
-            # every direction is taller than a story: whichever is up, the stories are implausible
-            problem += f" and the scan measures at least {extent[0]:,.0f} m in every direction, an implausible story height"
-        hint = "check the units of the scan (--units)"
-        for unit, factor in (("mm", 0.001), ("cm", 0.01), ("in", 0.0254)):
-            # suggest a unit only when it makes both the triangles and the building plausible
-            if 0.002 <= size * factor <= 0.5 and extent[-1] * factor >= 1.0:
-                hint = f"the scan seems to be in {unit}: pass --units {unit}"
-                break
-        raise GeometryError(problem, hint)
-
-
-def _check_floor(normals: FloatArray, heights: FloatArray, areas: FloatArray, floor: float, params: OrientParams) -> None:
-    """Walls stand on the floor: when much of the wall area lies well below the lowest floor
-    found, that "floor" is a table top or a ceiling, and the real floor is not in the scan."""
-    walls = np.abs(normals[:, 1]) < np.sin(np.radians(params.wall_exclusion_deg))
-    total = areas[walls].sum()
-    below = areas[walls & (heights < floor - 0.3)].sum()
-    if total > 0 and below > 0.25 * total:
-        raise GeometryError(
-            f"no floor found: {100 * below / total:.0f} % of the wall area lies below the lowest horizontal surface",
-            "make sure the scan includes the floor, or name the up axis with --up",
-        )
-
-
-def orient(mesh: Mesh, params: OrientParams | None = None, up_hint: FloatArray | None = None, declared_up: FloatArray | None = None) -> Orientation:
-    """Level the mesh, find its floors, ceilings and stories, and turn its walls onto the axes.
-
-    Parameters
-    ----------
-    mesh
-        The scan in input coordinates, metres.
-    params
-        Orientation parameters; the paper's defaults when omitted.
-    up_hint
-        A rough up direction in input coordinates, to use instead of searching for one (see
-        :func:`meshplan.pipeline.compute`, which tries the other way up when the scan says
-        little about it).
-    declared_up
-        The up direction the file's format declares (input coordinates; glTF: +y), a prior
-        where the geometry cannot decide (:func:`meshplan.orient.gravity.estimate_gravity`).
-
-    Raises
-    ------
-    GeometryError
-        No floor, no walls, or an implausible scale.
-    """
-    params = params or OrientParams()
-    _check_scale(mesh, params)
-    gravity = estimate_gravity(mesh, params, up_hint, declared_up)
-    areas = mesh.face_areas
-
-    def level(up):
-        r = rotation_between(up, [0.0, 1.0, 0.0])
-        n, c = mesh.face_normals @ r.T, mesh.face_centroids @ r.T
-        return r, n, c, find_levels(c[:, 1], n[:, 1], areas, params)
-
-    r_level, normals, centroids, levels = level(gravity.up)
-    if params.gravity_plane_fit and params.gravity_method == "kmeans":
-        slabs = [s.floor for s in levels.stories]
-        # slab heights are along the current up; refine in input coordinates
-        up, used = refine_with_slabs(
-            mesh.face_centroids, mesh.face_normals, areas, gravity.up, slabs, params
-        )
-        if used:
-            gravity = replace(gravity, up=up, faces_used=used)
-            r_level, normals, centroids, levels = level(up)
-    heights = centroids[:, 1]
-    lowest = levels.stories[0].floor
-    _check_floor(normals, heights, areas, lowest, params)
-    highest = levels.stories[-1].ceiling
-    alignment = align_walls(normals, areas, heights, lowest, highest, params)
-    if not alignment.directions:
-        raise GeometryError(
-            "no walls found: the scan has no vertical surfaces between its floor and ceiling",
-            "check that the scan includes the walls and that --up names the up axis",
-        )
-    r_yaw = rotation_about_y(alignment.yaw)
-    rotation = r_yaw @ r_level
-    verts = mesh.vertices @ rotation.T
-    x0 = float(np.quantile(verts[:, 0], 0.005))
-    z0 = float(np.quantile(verts[:, 2], 0.005))
-    transform = homogeneous(rotation, [-x0, -lowest, -z0])
-    levels = levels.shifted(-lowest)
-    heights = heights - lowest
-    stories = split_stories(levels)
-    directions = tuple(
-        WallDirection(normal=r_yaw @ d.normal, weight=d.weight, principal=d.principal) for d in alignment.directions
-    )
-    alignment = WallAlignment(alignment.yaw, directions, alignment.centers @ r_yaw.T, alignment.weights, alignment.faces_used)
-    face_story = assign_faces(heights, stories)
-    flipped = inward_flips(mesh, normals, centroids, heights, stories, params.slab_tolerance_m)
-    for s in stories:
-        if s.height > params.max_story_height_m:
-            raise GeometryError(f"implausible story height of {s.height:.1f} m", "check the units of the scan (--units)")
-    return Orientation(
-        transform=transform,
-        gravity=gravity,
-        levels=levels,
-        alignment=alignment,
-        stories=stories,
-        face_story=face_story,
-        flipped=flipped,
-        warnings=levels.warnings,
-    )
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS, globals())

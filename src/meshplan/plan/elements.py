@@ -48,7 +48,7 @@ from ..geometry import FloatArray, Mesh
 from ..orient import Story
 from ..walls import FlatWalls, PhysicalWall
 from ..walls.physical import wall_of_face
-from .drafting import DraftingPlan
+from .draft import DraftingPlan
 from .openings import Openings
 from .params import PlanParams
 from .rooms import Room
