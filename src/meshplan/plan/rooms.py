@@ -289,11 +289,21 @@ def footprint_raster(mesh: Mesh, orientation: Orientation, story: Story, floor: 
     k = max(1, int(round(closing_m / floor.cell)))
     tri = mesh.triangles[faces]
     big = np.max(np.linalg.norm(tri - np.roll(tri, 1, axis=1), axis=2), axis=1) > BIG_TRIANGLE_CELLS * floor.cell
-    pts = np.concatenate([mesh.vertices[np.unique(mesh.faces[faces[~big]])], sample_triangles(tri[big], floor.cell)])
+    # the small faces' corners, each once (a mask, not np.unique: the raster ignores order)
+    used = np.zeros(mesh.n_vertices, dtype=bool)
+    used[mesh.faces[faces[~big]].ravel()] = True
+    pts = np.concatenate([mesh.vertices[used], sample_triangles(tri[big], floor.cell)])
     grid = _raster(pts[:, [0, 2]], floor.cell, floor).grid | floor.grid
     pad = np.pad(grid, k)
     grid = binary_closing(pad, np.ones((2 * k + 1, 2 * k + 1), dtype=bool))[k:-k, k:-k]
     return FloorRaster(floor.x0, floor.z0, floor.cell, binary_fill_holes(grid) if fill else grid)
+
+
+def fill_holes(raster: FloorRaster) -> FloorRaster:
+    """``raster`` with its holes filled (what :func:`footprint_raster` gives with ``fill``)."""
+    from scipy.ndimage import binary_fill_holes
+
+    return FloorRaster(raster.x0, raster.z0, raster.cell, binary_fill_holes(raster.grid))
 
 
 def extend_walls(walls: FlatWalls, index: np.ndarray, reach_m: float) -> tuple[FloatArray, FloatArray]:
@@ -364,8 +374,8 @@ def story_rooms(mesh: Mesh, orientation: Orientation, walls: FlatWalls, story: S
     # the walls as scanned (corners only), and closed where the scan missed a piece of them
     scanned = segments(*extend_walls(walls, index, params.corner_extension_m))
     u_lo, u_hi, bridges = close_walls(walls, index, params.corner_extension_m, params.wall_gap_m, params.collinear_wall_m)
-    footprint = footprint_raster(mesh, orientation, story, raster, params.footprint_closing_m)
     seen = footprint_raster(mesh, orientation, story, raster, params.footprint_closing_m, fill=False)
+    footprint = fill_holes(seen)
     outline = footprint.outline(params.floor_margin_m)
     u_lo, u_hi = run_to_boundary(walls, index, u_lo, u_hi, outline, params.wall_gap_m, params.room_mouth_m, raster.segment_share)
     lines = segments(u_lo, u_hi) + bridges
