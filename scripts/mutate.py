@@ -75,10 +75,10 @@ MUTATIONS = (
     ),
     Mutation(
         "openings: doors need to reach twice as high",
-        "plan/openings.py",
-        "high - floor >= params.door_height_m - 2 * cell",
-        "high - floor >= 2 * params.door_height_m - 2 * cell",
-        ("tests/test_rooms.py", "tests/test_plans.py"),
+        "plan/doors.py",
+        "tall = head >= f.floor + params.door_height_m - tol",
+        "tall = head >= f.floor + 2 * params.door_height_m - tol",
+        ("tests/test_openings_synthetic.py",),
     ),
 )
 
