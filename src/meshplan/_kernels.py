@@ -187,18 +187,22 @@ def scatter_min(out, idx, values):  # pragma: no cover - compiled
 
 
 @njit(cache=True, nogil=True)
-def longest_edges(tri):  # pragma: no cover - compiled
-    """``(F,)`` longest edge of each face ``tri`` (F, 3, 3): the numbers of
-    ``np.linalg.norm(tri - np.roll(tri, 1, axis=1), axis=2).max(axis=1)``."""
+def max_corner_distance(tri, other, shift):  # pragma: no cover - compiled
+    """``(F,)`` largest distance from corner ``k`` of each face ``tri`` (F, 3, 3) to point
+    ``(k + shift) % 3`` of ``other`` (F, 3, 3; a broadcast view will do), a NaN kept as NaN.
+
+    ``max_corner_distance(tri, tri, 2)`` is each face's longest edge (the numbers of
+    ``np.linalg.norm(tri - np.roll(tri, 1, axis=1), axis=2).max(axis=1)``), and with ``other``
+    the centroids broadcast to (F, 3, 3) it is each face's reach from its centroid."""
     n = tri.shape[0]
     out = np.empty(n, np.float64)
     for f in range(n):
         best = 0.0
         for a in range(3):
-            b = (a + 2) % 3
-            e0 = tri[f, a, 0] - tri[f, b, 0]
-            e1 = tri[f, a, 1] - tri[f, b, 1]
-            e2 = tri[f, a, 2] - tri[f, b, 2]
+            b = (a + shift) % 3
+            e0 = tri[f, a, 0] - other[f, b, 0]
+            e1 = tri[f, a, 1] - other[f, b, 1]
+            e2 = tri[f, a, 2] - other[f, b, 2]
             d = np.sqrt(e0 * e0 + e1 * e1 + e2 * e2)
             if a == 0 or d > best or d != d:
                 best = d
@@ -248,7 +252,7 @@ def stable_group_order(labels, k):  # pragma: no cover - compiled
 
 @njit(cache=True, nogil=True)
 def _edge3(t):  # pragma: no cover - compiled
-    """Longest edge of one face ``t`` (3, 3), as :func:`longest_edges`."""
+    """Longest edge of one face ``t`` (3, 3), as ``max_corner_distance(tri, tri, 2)``."""
     best = 0.0
     for a in range(3):
         b = (a + 2) % 3
@@ -346,25 +350,6 @@ def sample_faces(tri, longest, spacing):  # pragma: no cover - compiled
         pieces, m, stack = _split_pieces(tri[f], longest, stack, pieces)
         for q in range(m):
             j = _grid_points(pieces[q], _levels(_edge3(pieces[q]), spacing), out, j)
-    return out
-
-
-@njit(cache=True, nogil=True)
-def face_reach(tri, centroids):  # pragma: no cover - compiled
-    """``(F,)`` largest distance of a corner from the centroid: the numbers of
-    ``np.max(np.linalg.norm(tri - centroids[:, None, :], axis=2), axis=1)``."""
-    n = tri.shape[0]
-    out = np.empty(n, np.float64)
-    for f in range(n):
-        best = 0.0
-        for a in range(3):
-            e0 = tri[f, a, 0] - centroids[f, 0]
-            e1 = tri[f, a, 1] - centroids[f, 1]
-            e2 = tri[f, a, 2] - centroids[f, 2]
-            d = np.sqrt(e0 * e0 + e1 * e1 + e2 * e2)
-            if a == 0 or d > best or d != d:
-                best = d
-        out[f] = best
     return out
 
 

@@ -36,7 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import ndimage
 
-from .._kernels import face_components, face_reach, sample_faces, scatter_max, scatter_min
+from .._kernels import face_components, max_corner_distance, sample_faces, scatter_max, scatter_min
 from ..geometry import FloatArray, IntArray, Mesh
 from ..walls import FlatWalls
 from .params import PlanParams
@@ -121,7 +121,9 @@ class WallEvidence:
         self.floorish = np.flatnonzero(np.abs(self.normals[:, 1]) >= FLOOR_NORMAL_COS)
         # each face's reach from its centroid, so that a cheap test on centroids finds the
         # faces that may cross a wall's slab before their corners are projected
-        self.radius = face_reach(np.ascontiguousarray(self.tri), np.ascontiguousarray(self.centroids)) if len(self.tri) else np.zeros(0)
+        tri = np.ascontiguousarray(self.tri)
+        centres = np.broadcast_to(np.ascontiguousarray(self.centroids)[:, None, :], tri.shape)
+        self.radius = max_corner_distance(tri, centres, 0) if len(tri) else np.zeros(0)
         self._cache: dict[tuple, tuple[FloatArray, IntArray, IntArray]] = {}
         self._panels: tuple[IntArray, IntArray] | None = None
         self._vertical_normals: FloatArray | None = None

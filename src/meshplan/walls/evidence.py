@@ -37,7 +37,7 @@ from typing import Literal
 
 import numpy as np
 
-from .._kernels import centroids_areas, longest_edges, plan_rasters, scatter_max, scatter_min, stable_group_order
+from .._kernels import centroids_areas, max_corner_distance, plan_rasters, scatter_max, scatter_min, stable_group_order
 from ..geometry import FloatArray, IntArray
 
 #: Cell of the plan rasters of a story (m): finer than a counter's depth (0.6 m) and a wall's
@@ -138,7 +138,8 @@ def subdivide(triangles: FloatArray, max_edge_m: float) -> tuple[FloatArray, Int
 def longest_edge(triangles: FloatArray) -> FloatArray:
     """``(F,)`` length of the longest edge of each face: the numbers of
     ``np.linalg.norm(t - np.roll(t, 1, axis=1), axis=2).max(axis=1)``, in one compiled pass."""
-    return longest_edges(np.ascontiguousarray(triangles, dtype=np.float64))
+    tri = np.ascontiguousarray(triangles, dtype=np.float64)
+    return max_corner_distance(tri, tri, 2)
 
 
 def _split_template(n: int) -> FloatArray:
