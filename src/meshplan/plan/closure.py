@@ -245,17 +245,21 @@ def run_to_boundary(
     if boundary is None or not n:
         return u_lo, u_hi
     tan, nor, off = walls.tangent[index], walls.normal[index], walls.offset[index]
-    lines = [LineString([u_lo[k] * tan[k] + off[k] * nor[k], u_hi[k] * tan[k] + off[k] * nor[k]]) for k in range(n)]
+    lines = np.array([LineString([u_lo[k] * tan[k] + off[k] * nor[k], u_hi[k] * tan[k] + off[k] * nor[k]]) for k in range(n)], dtype=object)
     ring = shapely.union_all([shapely.boundary(p) for p in shapely.get_parts(boundary)])
+    # the other walls near an end or along a run, from one tree (not a union of the others per wall)
+    tree = shapely.STRtree(lines)
     for k in range(n):
-        others = shapely.union_all(lines[:k] + lines[k + 1 :]) if n > 1 else None
         for sign in (-1.0, 1.0):
             u = u_lo[k] if sign < 0 else u_hi[k]
             end = u * tan[k] + off[k] * nor[k]
-            if others is not None and shapely.distance(shapely.Point(end), others) <= FREE_END_M:
+            near = tree.query(shapely.Point(end), predicate="dwithin", distance=FREE_END_M)
+            if np.any(near != k):
                 continue
             ray = LineString([end, end + sign * reach_m * tan[k]])
-            hit = ray.intersection(ring if others is None else shapely.union(ring, others))
+            crossed = tree.query(ray, predicate="intersects")
+            hits = shapely.intersection(ray, np.append(lines[crossed[crossed != k]], ring))
+            hit = shapely.union_all(shapely.extract_unique_points(hits))
             if hit.is_empty:
                 continue
             s = min(float(np.dot(np.asarray(p.coords[0]) - end, sign * tan[k])) for p in shapely.get_parts(shapely.extract_unique_points(hit)))
