@@ -38,7 +38,7 @@ def test_lazy_names_resolve_and_no_submodule_shadows_one(package):
     """Every name a lazy package lists loads; none is also the name of one of its submodules
     (importing that submodule would replace the name by the module on the package)."""
     pkg = importlib.import_module(package)
-    table = getattr(pkg, "_EXPORTS", None) or pkg._LAZY
+    table = pkg._EXPORTS
     assert set(pkg.__all__) == set(table) | ({"RenderParams"} if package == "meshplan.render" else set())
     subs = {m.name for m in pkgutil.iter_modules(pkg.__path__)}
     assert not subs & set(table)

@@ -19,7 +19,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from .sheet import Sheet, figure_bytes, make_sheet
 
 #: Where each lazily loaded name lives (a submodule of this package).
-_LAZY = {
+_EXPORTS = {
     "drafting_figure": "plans",
     "pen_and_ink_figure": "plans",
     "pen_and_ink_raster": "plans",
@@ -45,4 +45,4 @@ __all__ = [
 ]
 
 
-__getattr__, __dir__ = lazy_exports(__name__, _LAZY, globals())
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS, globals())
