@@ -24,8 +24,11 @@ TRUTH = SHARED / "truth"
 #: office's wall is not scanned above 1.3 m, so its window has no head; the tatami room's up is
 #: found along a wall (issue 9).
 REAL_WINDOWS = {
-    # two 0.4 m gap windows, one on the truth's unsure 2.2 m window, the other a hole in the scan
-    "hl2_su_apartment_two_story.ply": (0, 1),
+    # two 0.4 x 0.3-0.5 m holes (0.13-0.18 m2) in the scanned walls were windows, one of them
+    # by chance within 40 cm of the truth's unsure 2.2 m window; under window_area_m2 they are not
+    "hl2_su_apartment_two_story.ply": (0, 0),
+    # two 0.4 x 0.3 m holes (vents or scan holes: the hall's truth has no window)
+    "hl1_hemkinator_large_hall.ply": (0, 0),
     "hl2_su_office_chroje.ply": (0, 0),
     "quest_mruk_radiotwin_lab_parametric.obj": (1, 0),  # a glazing quad over an uncut wall, sill 0.15 m
     "roomplan_sekhar_library_parametric.ply": (1, 0),  # a window box in the wall plane
@@ -76,9 +79,10 @@ def test_real_openings(real_openings, key, name):
 @pytest.mark.realscan
 def test_real_doors_pooled(real_openings):
     """Over the scans: at least 9 of the 10 sure doors, and no door that is not one."""
-    sure = sum(r["doors"]["sure_truth"] for r in real_openings.values())
-    matched = sum(r["doors"]["matched_sure"] for r in real_openings.values())
-    extra = sum(r["doors"]["found"] - r["doors"]["matched"] for r in real_openings.values())
+    scored = [r for name, r in real_openings.items() if name in REAL_DOORS]
+    sure = sum(r["doors"]["sure_truth"] for r in scored)
+    matched = sum(r["doors"]["matched_sure"] for r in scored)
+    extra = sum(r["doors"]["found"] - r["doors"]["matched"] for r in scored)
     assert matched >= 0.9 * sure - 1e-9
     assert extra == 0
 

@@ -503,7 +503,7 @@ def _windows(f: _Frame, walls: FlatWalls, params: PlanParams) -> list[Candidate]
         top = float(tv_.min()) if len(tv_) else high
         bv = vy[across & (vy <= 0.5 * (low + high)) & (vy >= low - tol)]
         bottom = float(bv.max()) if len(bv) else low
-        if not (params.window_width_m[0] <= right - left <= params.window_width_m[1]):
+        if not (params.window_width_m[0] <= right - left <= params.window_width_m[1]) or (right - left) * (top - bottom) < params.window_area_m2:
             continue
         out.append(Candidate(kind, w, left, right, bottom, top, "gap"))
     return out
@@ -568,6 +568,7 @@ def _panels(ev: WallEvidence, w: int, floor: float, ceiling: float) -> list[Cand
         & (ymin >= floor + PANEL_SILL_MIN_M) & (ymax <= ceiling - params.opening_margin_m)
         & (ymax - ymin >= params.window_height_m)
         & (width >= params.window_width_m[0]) & (width <= params.window_width_m[1])
+        & (width * (ymax - ymin) >= params.window_area_m2)
         & (largest >= PANEL_PRIMITIVE_SHARE * width * (ymax - ymin))
     )
     out = []

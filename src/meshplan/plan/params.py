@@ -97,6 +97,10 @@ class PlanParams:
         Width range and smallest height of a door (a gap from the floor up).
     window_sill_m, window_width_m, window_height_m
         Smallest sill height above the floor, width range and smallest height of a window.
+    window_area_m2
+        Smallest clear area of a window (0.2 m2, e.g. 0.4 x 0.5 m: the smallest lavatory or
+        basement windows). Smaller holes with straight edges in a scanned wall are vents,
+        sockets, scan holes behind a picture or gaps between furniture in front of the wall.
     opening_slab_m
         Triangles this far in front of a wall face, or behind it by up to
         ``opening_wall_depth_m`` plus this, belong to the wall when openings are looked for
@@ -146,6 +150,7 @@ class PlanParams:
         "window_sill_m": _GAP,
         "window_width_m": _SPAN,
         "window_height_m": _LENGTH,
+        "window_area_m2": Real(0.0, MAX_LENGTH_M**2, why="larger than any building"),
         "opening_slab_m": _GAP,
         "opening_wall_depth_m": _GAP,
         "opening_facing_deg": Real(0.0, 90.0, why="an angle between a triangle's normal and the wall's"),
@@ -177,6 +182,7 @@ class PlanParams:
     window_sill_m: float = 0.3
     window_width_m: tuple[float, float] = (0.3, 3.0)
     window_height_m: float = 0.3
+    window_area_m2: float = 0.2
     opening_slab_m: float = 0.08
     opening_wall_depth_m: float = 0.25
     opening_facing_deg: float = 30.0
