@@ -263,6 +263,28 @@ def test_stairs_drawn_on_both_stories_and_exported(computed, tmp_path):
 
 
 @pytest.mark.slow
+def test_room_labels_keep_off_the_stair_symbol(computed):
+    """On both stories a stair connects, a room label stands where the room is free of the
+    stair's symbol (treads and arrow below, the void above) when the room has room for it."""
+    import shapely
+
+    from meshplan.plan.symbols import LABEL_FREE_MIN_M2, STAIR_LABEL_CLEAR_M, plan_symbols
+
+    _, result = computed("multistory", 1)
+    (stair,) = result.stairs
+    moved = 0
+    for story in (stair.story, stair.to_story):
+        symbols = plan_symbols(story, result.walls, result.openings, result.rooms, result.physical_walls, stairs=result.stairs)
+        for outline, label in zip(symbols.room_outlines, symbols.room_labels):
+            room = shapely.Polygon(outline)
+            free = room.difference(stair.footprint.buffer(STAIR_LABEL_CLEAR_M))
+            if room.intersects(stair.footprint) and max((p.area for p in shapely.get_parts(free)), default=0.0) >= LABEL_FREE_MIN_M2:
+                assert not stair.footprint.contains(shapely.Point(label.position)), (story, label.name)
+                moved += 1
+    assert moved >= 1  # the stairwell (or the room holding the stair) on at least one story
+
+
+@pytest.mark.slow
 def test_stacked_stairs_middle_story(computed):
     """Three stories: on the middle one the stair arriving from below and the one starting up
     are both drawn; the arriving one is hidden under the visible part of the starting one, whose

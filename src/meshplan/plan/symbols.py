@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 import shapely
+from shapely.geometry import Polygon
 from shapely.ops import polylabel
 
 from ..geometry import FloatArray
@@ -196,6 +197,24 @@ def _along_walls(a: FloatArray, b: FloatArray, wall_lines, tolerance_m: float = 
     return bool(np.mean(shapely.distance(pts, wall_lines) <= tolerance_m) >= 0.7)
 
 
+#: A room label keeps this far (m) from a stair's symbol: the treads' ends, the arrow's head.
+STAIR_LABEL_CLEAR_M = 0.1
+
+#: A room's label moves off a stair's symbol only to a free part at least this large (m2): a
+#: room that is all stair keeps its label at its pole, over the symbol.
+LABEL_FREE_MIN_M2 = 0.5
+
+
+def _label_area(polygon: Polygon, blocked) -> Polygon:
+    """The part of ``polygon`` in which its label goes: its largest part outside ``blocked``
+    (the stairs' symbols) when that is at least :data:`LABEL_FREE_MIN_M2`, else ``polygon``."""
+    if blocked is None or not polygon.intersects(blocked):
+        return polygon
+    parts = [p for p in shapely.get_parts(polygon.difference(blocked)) if isinstance(p, Polygon)]
+    best = max(parts, key=lambda p: p.area) if parts else None
+    return best if best is not None and best.area >= LABEL_FREE_MIN_M2 else polygon
+
+
 def plan_symbols(
     story: int,
     walls: FlatWalls,
@@ -260,6 +279,8 @@ def plan_symbols(
     dims, labels, outlines = [], [], []
     mine = np.flatnonzero(walls.story == story)
     wall_lines = shapely.MultiLineString([[tuple(walls.start[i]), tuple(walls.end[i])] for i in mine]) if len(mine) else None
+    drawn_stairs = [s.footprint for s in stairs if story in (s.story, s.to_story) and s.footprint is not None and not s.footprint.is_empty]
+    stair_area = shapely.union_all(drawn_stairs).buffer(STAIR_LABEL_CLEAR_M) if drawn_stairs else None
     for room in rooms:
         if room.story != story:
             continue
@@ -270,13 +291,16 @@ def plan_symbols(
             if length >= 0.5 and _along_walls(a, b, wall_lines):
                 dims.append(Dimension((float(a[0]), float(a[1])), (float(b[0]), float(b[1])), dimension_offset_m, format_length(length, imperial)))
         outlines.append(np.asarray(room.polygon.exterior.coords))
-        spot = polylabel(room.polygon, tolerance=0.02) if room.polygon.area > 0 else room.polygon.centroid
+        # the label goes where the room's floor is free of a stair's symbol (its treads and
+        # walking line below, the void above), when enough of the room is
+        free = _label_area(room.polygon, stair_area)
+        spot = polylabel(free, tolerance=0.02) if free.area > 0 else free.centroid
         name = room.name or room.label
-        radius = float(room.polygon.exterior.distance(spot))
+        radius = float(free.exterior.distance(spot))
         # the centre of a rectangle is as good a place as its pole and where a reader looks
-        centre = room.polygon.centroid
-        if room.polygon.contains(centre) and room.polygon.exterior.distance(centre) >= 0.8 * radius:
-            spot, radius = centre, float(room.polygon.exterior.distance(centre))
+        centre = free.centroid
+        if free.contains(centre) and free.exterior.distance(centre) >= 0.8 * radius:
+            spot, radius = centre, float(free.exterior.distance(centre))
         labels.append(
             Label((float(spot.x), float(spot.y)), f"{room.label}\n{format_area(room.area, imperial)}", name, room.number, room.area, radius, room.type)
         )
