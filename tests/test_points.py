@@ -355,6 +355,15 @@ def test_units_given_override_the_las_crs(tmp_path, room_z_up, caplog):
     # without --units the CRS's feet are applied
     feet = load_mesh(path)
     assert feet.stats.units == "ft" and np.allclose(np.ptp(feet.mesh.vertices, axis=0), 100.0 * US_FOOT_M * np.ptp(points, axis=0), rtol=0.01)
+    # --units m named on purpose overrides the CRS too (the default m does not)
+    write_las_crs(path, points, 1.0, 1.0, wkt=WKT_US_FEET)
+    metres = load_mesh(path, units="m", units_explicit=True)
+    assert metres.stats.units == "m" and metres.stats.scale_to_m == 1.0
+    assert np.allclose(np.ptp(metres.mesh.vertices, axis=0), np.ptp(points, axis=0), atol=0.05)
+    assert load_mesh(path, units="m").stats.units == "ft"
+    import meshplan
+
+    assert meshplan.run(path, units="m").input.units == "m"  # as `meshplan run --units m` passes it
 
 
 @pytest.mark.slow

@@ -97,10 +97,10 @@ def run(
     # the drawing workers start now and get ready while the stages compute
     with RenderPool(_processes(options.render)) if output is not None else nullcontext() as pool:
         with timer.stage("load"):
-            loaded = load_mesh(scan, options.input.units, options.input.max_faces, point_voxel_m=options.input.point_voxel_m)
+            # with keyword parameters, an absent --units comes as None (dropped by from_kwargs)
+            explicit = params.get("units") is not None if "units" in params else None
+            loaded = load_mesh(scan, options.input.units, options.input.max_faces, point_voxel_m=options.input.point_voxel_m, units_explicit=explicit)
             ann = load_annotations(annotations, loaded.stats.scale_to_m) if annotations is not None else Annotations()
-        # with keyword parameters, an absent --units comes as None (dropped by from_kwargs)
-        explicit = params.get("units") is not None if "units" in params else None
         result = compute(loaded.mesh, loaded.stats, ann, options, timer, units_explicit=explicit, room_edits=edits)
         if loaded.warnings:  # the reader's (float32 precision) first, before the stages'
             result = replace(result, warnings=(*loaded.warnings, *result.warnings))

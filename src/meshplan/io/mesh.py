@@ -704,7 +704,9 @@ def clean_mesh(vertices: np.ndarray, faces: np.ndarray) -> tuple[Mesh, dict[str,
     return Mesh(uniq[used], remap[faces])._seed(triangles=tri[keep], _cross=cross[keep]), counts
 
 
-def load_mesh(path: str | os.PathLike, units: str = "m", max_faces: int | None = None, point_voxel_m: float | None = None) -> LoadedMesh:
+def load_mesh(
+    path: str | os.PathLike, units: str = "m", max_faces: int | None = None, point_voxel_m: float | None = None, units_explicit: bool | None = None
+) -> LoadedMesh:
     """Read a scan file into metres and drop the faces that cannot be used.
 
     Meshes are read as they are; point clouds (E57, LAS/LAZ, XYZ/PTS/TXT, and PLY or OBJ files
@@ -725,6 +727,9 @@ def load_mesh(path: str | os.PathLike, units: str = "m", max_faces: int | None =
     point_voxel_m
         Voxel size of a point cloud's subsampling grid, metres; ``None`` for
         :data:`meshplan.io.points.VOXEL_M`.
+    units_explicit
+        Whether the user named ``units`` (``--units``), so that they override the units a point
+        cloud's CRS names, ``m`` too; ``None``: named when other than the default ``m``.
 
     Raises
     ------
@@ -740,7 +745,7 @@ def load_mesh(path: str | os.PathLike, units: str = "m", max_faces: int | None =
     if f".{file_type}" in POINT_FORMATS or (file_type == "ply" and points.ply_holds_points_only(p)):
         if file_type == "ply":
             check_header(p, file_type)  # a header claiming far more vertices than the file holds
-        return points.load_points(p, file_type, units, max_faces, voxel_m)
+        return points.load_points(p, file_type, units, max_faces, voxel_m, units_explicit=units_explicit)
     raw: RawMesh
     parametric = None
     if f".{file_type}" in USD_FORMATS:
@@ -750,7 +755,7 @@ def load_mesh(path: str | os.PathLike, units: str = "m", max_faces: int | None =
         check_size(p, file_type, max_faces)
         raw = read_raw(p, file_type, points_ok=file_type in ("obj", "off"))
     if not len(raw.faces):  # an OBJ or OFF with vertices only: a point cloud
-        return points.load_points(p, file_type, units, max_faces, voxel_m, cloud=points.PointCloud(raw.vertices))
+        return points.load_points(p, file_type, units, max_faces, voxel_m, cloud=points.PointCloud(raw.vertices), units_explicit=units_explicit)
     vertices, faces, objects = raw.vertices, raw.faces, raw.objects
     n_v, n_f = len(vertices), len(faces)
     if faces.size and (faces.min() < 0 or faces.max() >= n_v):

@@ -958,9 +958,9 @@ def splat_mesh(surfels: Surfels) -> Mesh:
     return Mesh(corners.reshape(-1, 3), faces)
 
 
-def _crs_scale(path: Path, crs: CrsUnits | None, units: str, scale: float) -> tuple[str, float, FloatArray]:
-    """The units a cloud is read in: its CRS's (:class:`CrsUnits`) unless ``units`` names others
-    (any but the default ``m``). Returns the unit's name, metres per unit of x and y (the scale
+def _crs_scale(path: Path, crs: CrsUnits | None, units: str, scale: float, explicit: bool) -> tuple[str, float, FloatArray]:
+    """The units a cloud is read in: its CRS's (:class:`CrsUnits`) unless the user named
+    ``units`` (``explicit``, ``m`` included). Returns the unit's name, metres per unit of x and y (the scale
     of :attr:`LoadStats.scale_to_m`) and the ``(3,)`` metres per unit of x, y and z (LAS's z is
     vertical, and its CRS may name another unit for it)."""
     from ..units import UNITS_M
@@ -968,7 +968,7 @@ def _crs_scale(path: Path, crs: CrsUnits | None, units: str, scale: float) -> tu
     same = np.full(3, scale)
     if crs is None:
         return units, scale, same
-    if units != "m":
+    if explicit:
         if abs(crs.horizontal_m - scale) > CRS_UNIT_MATCH * scale:
             log.warning("%s: its CRS says %s (%.10g m), read in --units %s as asked", path, crs.name, crs.horizontal_m, units)
         return units, scale, same
@@ -993,6 +993,7 @@ def load_points(
     max_faces: int | None = None,
     voxel_m: float = VOXEL_M,
     cloud: PointCloud | None = None,
+    units_explicit: bool | None = None,
 ) -> LoadedMesh:
     """Read a point cloud into metres, subsample it and turn it into splats.
 
@@ -1011,6 +1012,9 @@ def load_points(
         Voxel size of the subsampling grid, metres (:data:`VOXEL_M`).
     cloud
         The points, already read (an OBJ found to hold only vertices); ``None`` reads ``path``.
+    units_explicit
+        Whether the user named ``units``: then they override the CRS's units, ``m`` too;
+        ``None``: named when other than the default ``m``.
 
     Returns
     -------
@@ -1040,7 +1044,7 @@ def load_points(
                 f"subsample the point cloud, or pass --max-faces {n_est} to try anyway",
             )
         cloud = read_points(p, ft)
-    units, scale, axes = _crs_scale(p, cloud.crs_units, units, scale)
+    units, scale, axes = _crs_scale(p, cloud.crs_units, units, scale, units != "m" if units_explicit is None else units_explicit)
     n_read = len(cloud)
     finite = np.all(np.isfinite(cloud.points), axis=1)
     if not finite.all():
