@@ -80,7 +80,9 @@ PANEL_THICKNESS_M = 0.05
 PANEL_SILL_MIN_M = 0.1
 
 #: Tallest common door head above the floor (m; heads are 1.9-2.4 m): beside a gap whose lintel
-#: the scan missed, a wall rises above it, while wardrobes and partition screens (2.0-2.2 m) do not.
+#: the scan missed, a wall rises above it, while wardrobes and partition screens (2.0-2.2 m) do not;
+#: a gap whose "lintel" was scanned higher is no door (it runs up into the rounded-off corner
+#: between wall and ceiling, a bulkhead or a scan hole; a passage that high has no leaf).
 DOOR_HEAD_MAX_M = 2.4
 
 #: Cells (of ``opening_cell_m``) an edge may stray from its median and still be straight, and
@@ -456,6 +458,8 @@ def _doors(f: _Frame, walls: FlatWalls, floor_cols: np.ndarray, params: PlanPara
         tv = f.vy[across & (f.vy >= top - tol) & (f.vy <= top + tol)]
         if how != "no lintel" and len(tv):
             top = float(tv.min())
+        if how != "no lintel" and top > f.floor + DOOR_HEAD_MAX_M:
+            continue  # a lintel higher than any door's head
         out.append(Candidate("door", f.wall, left, right, f.floor, top, how))
     return out
 

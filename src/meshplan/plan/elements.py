@@ -103,9 +103,11 @@ MATCH_IOU = 0.3
 #: exceed the upper limit by this share (the scan rounds jambs off, and a width is measured
 #: between the outermost faces), ...
 ODD_WIDTH_MARGIN = 0.1
-#: ... and a door taller than this (m) is odd: doors are 2.0-2.4 m high, and a taller gap in a
-#: wall is a passage or a scan hole reaching the ceiling.
-DOOR_HEAD_MAX_M = 2.6
+#: ... and a door taller than this (m) is odd: doors are 2.0-2.4 m high (a gap whose lintel was
+#: scanned is no door above :data:`meshplan.plan.doors.DOOR_HEAD_MAX_M`), and a taller gap in a
+#: wall whose lintel was not scanned, or a parametric model's door, is a passage or a scan hole
+#: reaching the ceiling.
+DOOR_ODD_HEAD_M = 2.6
 #: The hole of an opening is seen on a face when wall-facing triangles in the plane of the face
 #: (within :data:`HOLE_PLANE_M`) cover less than this share of the opening's inner rectangle
 #: (inset by :data:`HOLE_INSET_M` from the jambs, sill and head, where scans round edges off).
@@ -569,7 +571,7 @@ def opening_elements(
             int(np.sign(float(walls.normal[g] @ n))) for g, u0, u1, b, t in cuts if _hole_seen(near, walls, int(g), float(u0), float(u1), float(b), float(t))
         }
         w_lo, w_hi = door_w if kind == "door" else window_w
-        odd = not (w_lo <= width <= w_hi) or (kind == "door" and not params.door_height_m <= height <= DOOR_HEAD_MAX_M)
+        odd = not (w_lo <= width <= w_hi) or (kind == "door" and not params.door_height_m <= height <= DOOR_ODD_HEAD_M)
         if i < len(openings.source) and openings.source[i] == "parametric":
             level, why = "high", "the parametric model's own box"
         elif odd:
