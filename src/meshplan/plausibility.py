@@ -194,7 +194,6 @@ def building_evidence(mesh: Mesh, orientation: Orientation, params: OrientParams
     rot = orientation.transform[:3, :3]
     normals = mesh.face_normals @ rot.T
     y = _plan_heights(mesh.face_centroids, orientation)
-    centroids = mesh.face_centroids @ rot.T
     areas = mesh.face_areas
     horiz = np.abs(normals[:, 1]) >= np.cos(np.radians(params.horizontal_tolerance_deg))
     tol = max(params.slab_tolerance_m, 0.5 * params.level_bucket_m)
@@ -205,13 +204,17 @@ def building_evidence(mesh: Mesh, orientation: Orientation, params: OrientParams
         ceiling = areas[horiz & (np.abs(y - s.ceiling) <= tol)].sum()
         if min(floor, ceiling) >= SLAB_MIN_AREA_M2:
             return ""
-    floors = {s.index: s.floor for s in orientation.stories}
+    # each face's story floor (0 for faces of no story), looked up by story index
+    index = np.array([s.index for s in orientation.stories], dtype=np.int64)
+    floor_of = np.zeros(int(index.max()) + 2 if len(index) else 1)
+    floor_of[index] = [s.floor for s in orientation.stories]
+    story = np.where(orientation.face_story >= 0, orientation.face_story, len(floor_of) - 1)
     cos_tol = np.cos(np.radians(WALL_NORMAL_TOL_DEG))
     for d in orientation.alignment.directions:
         along = np.abs(normals @ d.normal) >= cos_tol
         if areas[along].sum() < WALL_MIN_AREA_M2:
             continue
-        offset = centroids[along] @ d.normal
+        offset = mesh.face_centroids[along] @ (rot.T @ d.normal)
         # two half-slab bins at a time, so that a wall straddling a bin edge is kept whole
         bins = np.floor(offset / (0.5 * WALL_SLAB_M)).astype(np.int64)
         bins -= bins.min()
@@ -220,7 +223,7 @@ def building_evidence(mesh: Mesh, orientation: Orientation, params: OrientParams
         # the same direction's area within WALL_DEPTH_M either side, to judge flatness by
         reach = int(round(WALL_DEPTH_M / (0.5 * WALL_SLAB_M)))
         cum = np.r_[0.0, np.cumsum(per_bin)]
-        face_floor = np.array([floors.get(int(k), 0.0) for k in orientation.face_story[along]])
+        face_floor = floor_of[story[along]]
         for b in np.flatnonzero(pair >= WALL_MIN_AREA_M2):
             near = max(cum[min(b + 2, len(per_bin))] - cum[max(b + 2 - reach, 0)], cum[min(b + reach, len(per_bin))] - cum[b])
             if pair[b] < WALL_MIN_FLATNESS * near:
