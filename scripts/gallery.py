@@ -32,8 +32,18 @@ from typing import Any
 
 import numpy as np
 
-#: Mesh formats meshplan reads (as meshplan.io; a scan with another suffix is not a scan).
-MESH_SUFFIXES = {".obj", ".ply", ".glb", ".gltf", ".stl", ".off"}
+from meshplan.io.mesh import SCAN_FORMATS
+
+#: Scan formats meshplan reads (meshplan.io's meshes, point clouds and USD stages; a file with
+#: another suffix is not a scan).
+MESH_SUFFIXES = set(SCAN_FORMATS)
+#: Truth of a scan that has none under its own name: the RoomPlan USDZ exports are the stages
+#: the ``*_parametric.ply`` files were converted from, in the same world coordinates and metres
+#: (../shared/scans/MANIFEST.md), so the PLY's truth scores them.
+TRUTH_ALIASES = {
+    "roomplan_sekhar_library.usdz": "roomplan_sekhar_library_parametric",
+    "roomplan_sekhar_small_room.usdz": "roomplan_sekhar_small_room_parametric",
+}
 #: Files beside the scans that are not scans of their own: the HoloLens 2 device's plane quads.
 SIDECAR_SUFFIX = ".su_planes.ply"
 #: Formats meshplan cannot read yet, listed as skipped with this reason.
@@ -306,7 +316,7 @@ def score_and_draw(scan: Path, res: dict, out: Path, truth_dir: Path, ups: dict[
     try:
         plan = json.loads((run_dir / "plan.json").read_text(encoding="utf-8"))
         res["plan_stories"] = len(plan.get("stories", []))
-        truth_path = truth_dir / f"{scan.stem}.truth.json"
+        truth_path = truth_dir / f"{TRUTH_ALIASES.get(scan.name, scan.stem)}.truth.json"
         truth = json.loads(truth_path.read_text(encoding="utf-8")) if truth_path.is_file() else None
         report = None
         if truth is not None:
