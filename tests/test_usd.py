@@ -216,6 +216,10 @@ def write_roomplan(path, *, meters_per_unit, up):
     ceiling.CreatePointsAttr(Vt.Vec3fArray.FromNumpy((corners + to_stage([0.0, H, 0.0], at=(0.0, 0.0, 0.0))).astype(np.float32)))
     ceiling.CreateFaceVertexCountsAttr(Vt.IntArray([4]))
     ceiling.CreateFaceVertexIndicesAttr(Vt.IntArray([0, 1, 2, 3] if up == "Y" else [0, 3, 2, 1]))
+    # RoomPlan's section: the room's label at its centre; an unidentified one beside it
+    UsdGeom.Xform.Define(stage, "/Room/Section_grp")
+    for name, centre in (("bedroom0", (2.5, 1.2, 2.0)), ("unidentified0", (2.0, 1.2, 2.5))):
+        UsdGeom.Xform.Define(stage, f"/Room/Section_grp/{name}").AddTranslateOp().Set(Gf.Vec3d(*to_stage(centre)))
     stage.GetRootLayer().Save()
     return {
         "door": [{"width": 0.9, "bottom": 0.0, "top": 2.1}],
@@ -260,4 +264,8 @@ def test_roomplan_like_stage_in_any_units_and_up_axis(tmp_path, meters_per_unit,
     assert on_bookcase(doc) == 0
     # the room: 5 x 4 m, the bookcase's floor included
     assert len(doc["rooms"]) == 1 and doc["rooms"][0]["area"] == pytest.approx(20.0, rel=0.005)
+    # named by RoomPlan's section (read in the stage's units and axes), not "Room 1"
+    assert el.section_label == ("bedroom", "unidentified")
+    assert doc["rooms"][0]["name"] == "Bedroom" and doc["rooms"][0]["label"] == "Bedroom"
+    assert plain["rooms"][0]["name"] == "Room 1"
     assert plain["rooms"][0]["area"] < doc["rooms"][0]["area"] - 0.3

@@ -17,7 +17,7 @@ from .options import RunOptions
 from .orient import assign_faces
 from .orient.stories import without_ceiling
 from .plan import drafting, find_openings, find_rooms, find_stairs, pen_and_ink
-from .plan.elements import RoomEdit, mark_low_confidence, name_rooms, opening_elements, type_rooms, wall_elements
+from .plan.elements import ModelName, RoomEdit, mark_low_confidence, name_rooms, opening_elements, section_names, type_rooms, wall_elements
 from .plan.parametric import apply_parametric
 from .plan.stairs import attach_rooms
 from .plan.symbols import plan_symbols
@@ -51,6 +51,16 @@ __all__ = [
 
 #: Share of the area-weighted normals along one direction above which a scan holds no room.
 FLAT_SHARE = 0.98
+
+
+def _model_names(stats: LoadStats, orientation) -> tuple[ModelName, ...]:
+    """The room names a parametric model gives (RoomPlan's sections), in the plan frame."""
+    p = stats.parametric
+    if p is None or not len(p.section_label):
+        return ()
+    centers = np.asarray(p.section_center, dtype=np.float64) * stats.scale_to_m
+    t = orientation.transform
+    return section_names(p.section_label, centers @ t[:3, :3].T + t[:3, 3], orientation.stories)
 
 
 def check_not_flat(mesh: Mesh) -> None:
@@ -124,7 +134,7 @@ def compute(
         # building elements: walls meeting at their centre lines, rooms numbered and named,
         # what each wall and opening joins, types and confidences
         physical = join_walls(physical, JOIN_REACH_M)
-        rooms = name_rooms(rooms, room_edits)
+        rooms = name_rooms(rooms, room_edits, _model_names(stats, orientation))
         physical = wall_elements(physical, rooms, orientation.stories, options.walls.floor_reach_m, options.walls.ceiling_reach_m)
         elements = opening_elements(openings, walls, physical, rooms, orientation.stories, plan_mesh, options.plan)
         # stairs from the stepped horizontal surfaces; the rooms holding them are stairwells

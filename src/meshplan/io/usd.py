@@ -29,7 +29,7 @@ The layout read, as RoomPlan (iOS 16 and 17) writes it::
     /Room/Parametric_grp/Arch_grp/Wall_17_grp/Window0   Cube
     /Room/Parametric_grp/Floor_grp/Floor0               Mesh
     /Room/Parametric_grp/Object_grp/Storage_grp/Storage4  Cube (objects: Storage, Table, Sofa, Bed...)
-    /Room/Section_grp/livingRoom0                       Xform (RoomPlan's room labels; not read)
+    /Room/Section_grp/livingRoom0                       Xform (RoomPlan's room labels, at each room's centre)
 """
 
 from __future__ import annotations
@@ -72,6 +72,9 @@ _ROOMPLAN_NAME = re.compile(r"^([A-Za-z]+?)(\d+)$")
 #: The group RoomPlan puts a wall and the doors, windows and openings in it into.
 _ROOMPLAN_WALL_GROUP = re.compile(r"^Wall_(\d+)_grp$")
 
+#: The group holding RoomPlan's sections (its room labels, one Xform at each room's centre).
+_ROOMPLAN_SECTIONS = "Section_grp"
+
 #: RoomPlan's kinds of the openings in a wall.
 ROOMPLAN_OPENINGS = ("door", "window", "opening")
 
@@ -95,12 +98,18 @@ class RoomPlanElements:
         ``(N, 8, 3)`` corners of each box (a wall is a box 0.1 mm thick), in the order of
         :data:`meshplan.geometry.BOX_CORNERS` (so ``corners[:, 4] - corners[:, 0]`` is the box's
         local x edge, ``[:, 2] - [:, 0]`` its y edge and ``[:, 1] - [:, 0]`` its z edge).
+    section_label, section_center
+        RoomPlan's sections (``/Room/Section_grp``): per section its label (``livingRoom``,
+        ``bedroom``, ``kitchen``, ``bathroom``, ``diningRoom``, ``unidentified``) and ``(K, 3)``
+        its centre (input coordinates, Y-up), which names the room holding it.
     """
 
     kind: tuple[str, ...]
     name: tuple[str, ...]
     host: IntArray
     corners: FloatArray
+    section_label: tuple[str, ...] = ()
+    section_center: FloatArray = field(default_factory=lambda: np.zeros((0, 3)))
 
     def __len__(self) -> int:
         return len(self.kind)
@@ -278,6 +287,7 @@ def read_usd(path: Path, max_faces: int | None = None) -> UsdScene:
     skipped: Counter[str] = Counter()
     roomplan = False
     boxes: list[tuple[str, str, str | None, np.ndarray]] = []  # RoomPlan: kind, name, host wall's name, corners
+    sections: list[tuple[str, np.ndarray]] = []  # RoomPlan: label, centre
     it = iter(Usd.PrimRange(stage.GetPseudoRoot(), Usd.TraverseInstanceProxies()))
     for prim in it:  # one step per prim (a RoomPlan stage holds some 200), not per vertex
         if prim.IsA(UsdGeom.Imageable):
@@ -290,6 +300,11 @@ def read_usd(path: Path, max_faces: int | None = None) -> UsdScene:
             it.PruneChildren()  # its prototypes are not where they stand
             continue
         if not prim.IsA(UsdGeom.Gprim):
+            parent = prim.GetParent()
+            section = _ROOMPLAN_NAME.match(prim.GetName()) if parent and parent.GetName() == _ROOMPLAN_SECTIONS else None
+            if section is not None and prim.IsA(UsdGeom.Xformable):
+                m = np.array(cache.GetLocalToWorldTransform(prim), dtype=np.float64)
+                sections.append((section.group(1), m[3, :3]))
             continue
         geom = _local_geometry(prim, UsdGeom, time)
         if geom is None:
@@ -319,7 +334,7 @@ def read_usd(path: Path, max_faces: int | None = None) -> UsdScene:
     v = np.concatenate(verts)
     if up.upper() == "Z":
         v = v @ Z_UP_TO_Y_UP
-    parametric = _roomplan_elements(boxes, up.upper() == "Z") if roomplan and boxes else None
+    parametric = _roomplan_elements(boxes, sections, up.upper() == "Z") if roomplan and boxes else None
     if roomplan:
         log.info("%s: RoomPlan parametric model: %s", path, ", ".join(f"{n} {k}" for k, n in sorted(parts.items())))
     if skipped:
@@ -340,12 +355,14 @@ def _roomplan_box(prim, kind: str | None, world: np.ndarray, UsdGeom) -> tuple[s
     return kind, prim.GetName(), host, world
 
 
-def _roomplan_elements(boxes: list[tuple[str, str, str | None, np.ndarray]], z_up: bool) -> RoomPlanElements:
+def _roomplan_elements(boxes: list[tuple[str, str, str | None, np.ndarray]], sections: list[tuple[str, np.ndarray]], z_up: bool) -> RoomPlanElements:
     """The :class:`RoomPlanElements` of the boxes read (kind, name, host wall's name, world
-    corners), turned Y-up as the vertices are."""
+    corners) and the sections (label, world centre), turned Y-up as the vertices are."""
     corners = np.stack([b[3] for b in boxes]).reshape(-1, 8, 3)
+    centers = np.array([c for _, c in sections], dtype=np.float64).reshape(-1, 3)
     if z_up:
         corners = corners @ Z_UP_TO_Y_UP
+        centers = centers @ Z_UP_TO_Y_UP
     row = {name: i for i, (kind, name, _, _) in enumerate(boxes) if kind == "wall"}
     host = np.array([row.get(h, -1) if h is not None else -1 for _, _, h, _ in boxes], dtype=np.int64)
-    return RoomPlanElements(tuple(b[0] for b in boxes), tuple(b[1] for b in boxes), host, corners)
+    return RoomPlanElements(tuple(b[0] for b in boxes), tuple(b[1] for b in boxes), host, corners, tuple(label for label, _ in sections), centers)

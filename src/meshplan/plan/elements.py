@@ -246,13 +246,50 @@ def _match_edits(rooms: tuple[Room, ...], edits: tuple[RoomEdit, ...]) -> dict[i
     return out
 
 
-def name_rooms(rooms: tuple[Room, ...], edits: tuple[RoomEdit, ...] = ()) -> tuple[Room, ...]:
+@dataclass(frozen=True)
+class ModelName:
+    """A room's name that the scan's own model gives (a RoomPlan section's label), at a point
+    (plan x, z) of a story's room."""
+
+    story: int
+    point: tuple[float, float]
+    name: str
+
+
+#: RoomPlan's section labels that name nothing.
+UNNAMED_SECTIONS = ("unidentified",)
+
+
+def section_names(labels: tuple[str, ...], centers: FloatArray, stories: tuple[Story, ...]) -> tuple[ModelName, ...]:
+    """The :class:`ModelName` of each RoomPlan section (``labels`` such as ``livingRoom``, at
+    ``centers``, ``(K, 3)`` plan coordinates): ``Living room`` on the story whose floor is the
+    highest below the centre; the unidentified ones name nothing."""
+    out = []
+    for label, c in zip(labels, np.asarray(centers, dtype=np.float64).reshape(-1, 3)):
+        if label in UNNAMED_SECTIONS or not stories:
+            continue
+        below = [s for s in stories if s.floor <= c[1]]
+        story = max(below, key=lambda s: s.floor) if below else min(stories, key=lambda s: s.floor)
+        words = "".join(f" {ch.lower()}" if ch.isupper() else ch for ch in label).strip()
+        out.append(ModelName(story.index, (float(c[0]), float(c[2])), words[:1].upper() + words[1:]))
+    return tuple(out)
+
+
+def name_rooms(rooms: tuple[Room, ...], edits: tuple[RoomEdit, ...] = (), model_names: tuple[ModelName, ...] = ()) -> tuple[Room, ...]:
     """The rooms numbered in reading order per story and labelled ``Room 1``, ``Room 2``, ...
     across the stories in that order, with the numbers, names and types of the ``edits``
     (:func:`load_room_edits`) they match; a room matching none takes the next number free in
-    its story. A user's name becomes the label too (plans, IFC and report show it)."""
+    its story. A user's name becomes the label too (plans, IFC and report show it); a room
+    without one takes the name the scan's model gives it (``model_names``: the first that lies
+    in it), as its label too."""
     order = reading_order(rooms)
     matched = _match_edits(rooms, edits)
+    named: dict[int, str] = {}
+    for m in model_names:
+        for i, r in enumerate(rooms):
+            if i not in named and r.story == m.story and r.polygon.contains(Point(m.point)):
+                named[i] = m.name
+                break
     used: dict[int, set[str]] = {}
     for i, m in matched.items():
         if m.number:
@@ -277,7 +314,7 @@ def name_rooms(rooms: tuple[Room, ...], edits: tuple[RoomEdit, ...] = ()) -> tup
     out = []
     for n, i in enumerate(final):
         r, e = rooms[i], matched.get(i)
-        label = e.name if e is not None and e.name else f"Room {n + 1}"
+        label = e.name if e is not None and e.name else named.get(i, f"Room {n + 1}")
         kind = e.type if e is not None and e.type else ""
         out.append(replace(r, label=label, number=numbers[i], name=label, type=kind or r.type, type_reason="rooms.json" if kind else ""))
     return tuple(out)
