@@ -285,10 +285,10 @@ def name_rooms(rooms: tuple[Room, ...], edits: tuple[RoomEdit, ...] = (), model_
     order = reading_order(rooms)
     matched = _match_edits(rooms, edits)
     named: dict[int, str] = {}
-    for m in model_names:
+    for given in model_names:
         for i, r in enumerate(rooms):
-            if i not in named and r.story == m.story and r.polygon.contains(Point(m.point)):
-                named[i] = m.name
+            if i not in named and r.story == given.story and r.polygon.contains(Point(given.point)):
+                named[i] = given.name
                 break
     used: dict[int, set[str]] = {}
     for i, m in matched.items():
