@@ -265,10 +265,12 @@ def test_stairs_drawn_on_both_stories_and_exported(computed, tmp_path):
 @pytest.mark.slow
 def test_room_labels_keep_off_the_stair_symbol(computed):
     """On both stories a stair connects, a room label stands where the room is free of the
-    stair's symbol (treads and arrow below, the void above) when the room has room for it."""
+    stair's symbol (treads and arrow below, the void above) when the room has room for it
+    there."""
     import shapely
+    from shapely.ops import polylabel
 
-    from meshplan.plan.symbols import LABEL_FREE_MIN_M2, STAIR_LABEL_CLEAR_M, plan_symbols
+    from meshplan.plan.symbols import LABEL_FREE_RADIUS_M, STAIR_LABEL_CLEAR_M, plan_symbols
 
     _, result = computed("multistory", 1)
     (stair,) = result.stairs
@@ -278,7 +280,8 @@ def test_room_labels_keep_off_the_stair_symbol(computed):
         for outline, label in zip(symbols.room_outlines, symbols.room_labels):
             room = shapely.Polygon(outline)
             free = room.difference(stair.footprint.buffer(STAIR_LABEL_CLEAR_M))
-            if room.intersects(stair.footprint) and max((p.area for p in shapely.get_parts(free)), default=0.0) >= LABEL_FREE_MIN_M2:
+            roomy = [p for p in shapely.get_parts(free) if p.area > 0 and p.exterior.distance(polylabel(p, tolerance=0.02)) >= LABEL_FREE_RADIUS_M]
+            if room.intersects(stair.footprint) and roomy:
                 assert not stair.footprint.contains(shapely.Point(label.position)), (story, label.name)
                 moved += 1
     assert moved >= 1  # the stairwell (or the room holding the stair) on at least one story

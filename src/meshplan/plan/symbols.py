@@ -200,19 +200,23 @@ def _along_walls(a: FloatArray, b: FloatArray, wall_lines, tolerance_m: float = 
 #: A room label keeps this far (m) from a stair's symbol: the treads' ends, the arrow's head.
 STAIR_LABEL_CLEAR_M = 0.1
 
-#: A room's label moves off a stair's symbol only to a free part at least this large (m2): a
-#: room that is all stair keeps its label at its pole, over the symbol.
-LABEL_FREE_MIN_M2 = 0.5
+#: A room's label moves off a stair's symbol only to a free part whose pole lies at least this
+#: far (m) from its outline: room for a two-line label at full size (about 0.8 m across at
+#: 1:50); a room that is nearly all stair keeps its label at its pole, over the symbol, rather
+#: than squeezed into a strip beside it.
+LABEL_FREE_RADIUS_M = 0.4
 
 
 def _label_area(polygon: Polygon, blocked) -> Polygon:
-    """The part of ``polygon`` in which its label goes: its largest part outside ``blocked``
-    (the stairs' symbols) when that is at least :data:`LABEL_FREE_MIN_M2`, else ``polygon``."""
+    """The part of ``polygon`` in which its label goes: its part outside ``blocked`` (the
+    stairs' symbols) that gives the label the most room, when that is at least
+    :data:`LABEL_FREE_RADIUS_M`, else ``polygon``."""
     if blocked is None or not polygon.intersects(blocked):
         return polygon
-    parts = [p for p in shapely.get_parts(polygon.difference(blocked)) if isinstance(p, Polygon)]
-    best = max(parts, key=lambda p: p.area) if parts else None
-    return best if best is not None and best.area >= LABEL_FREE_MIN_M2 else polygon
+    parts = [p for p in shapely.get_parts(polygon.difference(blocked)) if isinstance(p, Polygon) and p.area > 0]
+    room = [(float(p.exterior.distance(polylabel(p, tolerance=0.02))), p) for p in parts]
+    radius, best = max(room, key=lambda r: r[0], default=(0.0, polygon))
+    return best if radius >= LABEL_FREE_RADIUS_M else polygon
 
 
 def plan_symbols(
