@@ -103,7 +103,34 @@ def compute(
     (``--rooms``, :func:`meshplan.plan.elements.load_room_edits`) whose numbers, names and types
     the matching rooms take. Units, up axis and the building itself are
     checked against the geometry (:func:`meshplan.plausibility.orient_plausibly`).
+
+    The stages run with :data:`COMPUTE_BLAS_THREADS` BLAS thread (see there).
     """
+    from threadpoolctl import threadpool_limits
+
+    with threadpool_limits(limits=COMPUTE_BLAS_THREADS, user_api="blas"):
+        return _compute(mesh, stats, annotations, options, timer, units_explicit, room_edits)
+
+
+#: BLAS threads while the stages compute. Their products are thin (``(F, 3)`` points, normals
+#: or triangles by ``(3,)`` or ``(3, 3)``), which a second thread does not speed up, and the
+#: drawing workers run beside the stages on the other cores: with one thread per core
+#: already busy, a multithreaded OpenBLAS product waits for its descheduled second thread (the
+#: openings stage of a 300k-face scan took 0.68 s with two threads on a loaded 2-core machine,
+#: 0.30 s with one).
+COMPUTE_BLAS_THREADS = 1
+
+
+def _compute(
+    mesh: Mesh,
+    stats: LoadStats,
+    annotations: Annotations,
+    options: RunOptions,
+    timer: _Timer | None,
+    units_explicit: bool | None,
+    room_edits: tuple[RoomEdit, ...],
+) -> Result:
+    """:func:`compute` itself, under its BLAS thread limit."""
     from .plausibility import orient_plausibly
 
     timer = timer or _Timer(None)
