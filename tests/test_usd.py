@@ -260,12 +260,13 @@ def test_roomplan_like_stage_in_any_units_and_up_axis(tmp_path, meters_per_unit,
         ends = np.array([[w["start"], w["end"]] for w in d["walls"]])
         return int(np.sum(np.all((ends >= lo) & (ends <= hi), axis=(1, 2))))
 
-    assert on_bookcase(plain) >= 1, "the test's bookcase must be taken for a wall without its box"
-    assert on_bookcase(doc) == 0
+    # with RoomPlan's element list, and without it (a PLY conversion: the bookcase is still a
+    # closed 12-triangle box thicker than a wall, meshplan.walls.solids), no wall on the bookcase
+    assert on_bookcase(doc) == 0 and on_bookcase(plain) == 0
     # the room: 5 x 4 m, the bookcase's floor included
     assert len(doc["rooms"]) == 1 and doc["rooms"][0]["area"] == pytest.approx(20.0, rel=0.005)
     # named by RoomPlan's section (read in the stage's units and axes), not "Room 1"
     assert el.section_label == ("bedroom", "unidentified")
     assert doc["rooms"][0]["name"] == "Bedroom" and doc["rooms"][0]["label"] == "Bedroom"
     assert plain["rooms"][0]["name"] == "Room 1"
-    assert plain["rooms"][0]["area"] < doc["rooms"][0]["area"] - 0.3
+    assert plain["rooms"][0]["area"] == pytest.approx(doc["rooms"][0]["area"], rel=0.005)

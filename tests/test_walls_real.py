@@ -33,8 +33,12 @@ TRUTH = SHARED / "truth"
 #: Per scan: least wall recall (``None``: fewer than 2 sure walls, not checked) and most
 #: furniture length (m) of story 0. Reached (recall / furniture), with the walls at the edge of
 #: the scan kept where their tops are lost under the ceiling, their feet hidden by furniture or
-#: the scan ends below the work surfaces (issue 9: evidence.EDGE_WALL_MIN_TOP_M and
-#: EDGE_WALL_MIN_SEEN_M): ashro 1.0 / 0.03, cuny 0.73 / 0, hemkinator 0.92 / 2.85, holosoma - /
+#: the scan ends below the work surfaces, and the boxes of parametric models, pilasters, pillars
+#: and fragments seen through doors no walls (test_walls_furniture_real): ashro 1.0 / 0.03, cuny
+#: 0.73 / 0, hemkinator 0.92 / 0, holosoma - / 0.29, mrtk 0.98 / 0, apartment 0.93 / 1.33,
+#: chroje 0.92 / 0, tatami 0.97 / 0, quest 0.97 / 0, library 0.96 / 0, small room 1.0 / 0,
+#: office 1.0 / 0, closed room 0.99 / 0. Before the last (evidence.EDGE_WALL_MIN_TOP_M and
+#: EDGE_WALL_MIN_SEEN_M only): ashro 1.0 / 0.03, cuny 0.73 / 0, hemkinator 0.92 / 2.85, holosoma - /
 #: 0.39, mrtk 0.98 / 0, apartment 0.93 / 1.33, chroje 0.92 / 0, tatami 0.97 / 0, quest 0.97 /
 #: 0.04, library 0.98 / 1.9, small room 1.0 / 0, office 1.0 / 0.51, closed room 0.99 / 0.
 #: Before that (walls at their own angle, free-standing pieces dropped): 0.91 /
@@ -47,16 +51,16 @@ TRUTH = SHARED / "truth"
 EXPECTED = {
     "hl1_ashro_room_45deg": (0.95, 0.5),  # no ceiling
     "hl1_cuny_room_sparse_walls": (0.65, 0.5),  # walls seen in pieces, tops lost under the ceiling
-    "hl1_hemkinator_large_hall": (0.85, 3.5),  # drifted walls (drawn at their angle), pillars
+    "hl1_hemkinator_large_hall": (0.85, 0.5),  # drifted walls (drawn at their angle), pillars, pilasters
     "hl1_holosoma_room_sparse_walls": (None, 0.6),
     "hl1_mrtk_example_office": (0.85, 0.5),  # free-standing screens
     "hl2_su_apartment_two_story": (0.9, 2.0),  # kitchen counters and island
     "hl2_su_office_chroje": (0.85, 0.5),  # desks
     "iphone_polycam_tamatebox_tatami_room": (0.9, 0.5),  # a beam at 2.0 m
     "quest_mruk_radiotwin_lab_parametric": (0.9, 0.5),  # two triangles per wall
-    "roomplan_sekhar_library_parametric": (0.9, 2.5),  # no ceiling, walls 2.82 m
+    "roomplan_sekhar_library_parametric": (0.9, 0.5),  # no ceiling, walls 2.82 m, furniture boxes
     "roomplan_sekhar_small_room_parametric": (0.95, 0.5),  # no ceiling, walls 2.41 m
-    "tango_rainfiel_office_open": (0.95, 1.0),  # no ceiling, walls seen to 1.1-1.3 m
+    "tango_rainfiel_office_open": (0.95, 0.5),  # no ceiling, walls seen to 1.1-1.3 m, a desk screen
     "tango_rainfiel_room_closed": (0.95, 0.5),
 }
 

@@ -78,6 +78,10 @@ MIN_COLUMN_SPAN_SHARE = 0.5
 #: window sill.
 MIN_BEHIND_SPAN_M = 0.3
 
+#: Something scanned this close below the story's ceiling (m) is the ceiling: headset meshes
+#: scatter a ceiling by 2-5 cm, while wardrobes and tall cupboards stop 0.2 m or more below it.
+CEILING_TOLERANCE_M = 0.1
+
 #: A column at the edge of the scan (nothing scanned behind it) whose top is at least this high
 #: above the floor (m) reaches: its top is lost in the unscanned band under the ceiling, which
 #: headsets often miss on walls (their rays graze it). Door heads (2.0-2.1 m) and furniture
@@ -368,6 +372,51 @@ def floor_behind(raster: StoryRaster, start: FloatArray, end: FloatArray, normal
     thickness_m, depth_m
         The band behind each face that is searched (m).
     """
+    return _share_behind(raster, raster.floor, 0.5, start, end, normal, thickness_m, depth_m)
+
+
+def ceiling_behind(
+    raster: StoryRaster, start: FloatArray, end: FloatArray, normal: FloatArray, thickness_m: float, depth_m: float, ceiling_m: float
+) -> FloatArray:
+    """Share of the length of each wall face with something scanned up to ``ceiling_m`` (the
+    story's ceiling, less :data:`CEILING_TOLERANCE_M`) behind it (pass ``-normal`` for the side
+    in front), beyond ``thickness_m`` and within ``depth_m``: the space goes on over the face's
+    top. A wall bounds the space up to the ceiling; behind it lies its other face, then another
+    room or nothing seen. Behind a pillar or a column the ceiling runs on all round its top (its
+    footprint is a small hole in the scanned ceiling). Same parameters as :func:`floor_behind`."""
+    return _share_behind(raster, raster.top, ceiling_m, start, end, normal, thickness_m, depth_m)
+
+
+def work_surface_in_front(raster: StoryRaster, start: FloatArray, end: FloatArray, normal: FloatArray, floor: float, work_surface_m: float) -> FloatArray:
+    """Share of the length of each wall face with a level surface at work-surface height (more
+    than :data:`FLOOR_CLEARANCE_M` and at most ``work_surface_m`` above ``floor``) in front of
+    it, in the strip where a counter's or a desk's top meets a front (:data:`TOP_SEARCH_M`, on
+    the side ``normal`` points to): a desk or a counter against the face."""
+    shelf = raster.shelf
+    with np.errstate(invalid="ignore"):
+        work = np.where((shelf > floor + FLOOR_CLEARANCE_M) & (shelf <= floor + work_surface_m), 1.0, 0.0)
+    return _share_behind(raster, work, 0.5, start, end, -normal, TOP_SEARCH_M[0] - RASTER_M / 2, TOP_SEARCH_M[1])
+
+
+def top_around(raster: StoryRaster, start: FloatArray, end: FloatArray, normal: FloatArray, thickness_m: float, depth_m: float) -> FloatArray:
+    """Highest point scanned in front of each wall face (within ``depth_m``) and behind it
+    (beyond ``thickness_m`` and within ``depth_m``), along its length (m; ``-inf`` where nothing
+    was): where it is no higher than the face's own top, that top is lost in unscanned space."""
+    if not len(start):
+        return np.zeros(0)
+    step = RASTER_M / 2
+    along = (np.arange(8) + 0.5) / 8
+    across = np.r_[-np.arange(step, depth_m + 1e-9, step), np.arange(thickness_m + step, depth_m + 1e-9, step)]
+    p = start[:, None, None, :] + along[None, :, None, None] * (end - start)[:, None, None, :]
+    p = p - across[None, None, :, None] * normal[:, None, None, :]
+    return raster.sample(raster.top, p[..., 0], p[..., 1], -np.inf).reshape(len(start), -1).max(axis=1)
+
+
+def _share_behind(
+    raster: StoryRaster, grid: FloatArray, at_least: float, start: FloatArray, end: FloatArray, normal: FloatArray, thickness_m: float, depth_m: float
+) -> FloatArray:
+    """Share of the length of each face with a cell of ``grid`` of at least ``at_least`` behind
+    it, beyond ``thickness_m`` and within ``depth_m`` (8 samples along each face)."""
     if not len(start):
         return np.zeros(0)
     step = RASTER_M / 2
@@ -377,7 +426,7 @@ def floor_behind(raster: StoryRaster, start: FloatArray, end: FloatArray, normal
         return np.zeros(len(start))
     p = start[:, None, None, :] + along[None, :, None, None] * (end - start)[:, None, None, :]
     p = p - behind[None, None, :, None] * normal[:, None, None, :]
-    hit = raster.sample(raster.floor, p[..., 0], p[..., 1], 0.0) > 0  # (W, 8, depth)
+    hit = raster.sample(grid, p[..., 0], p[..., 1], -np.inf) >= at_least  # (W, 8, depth)
     return hit.any(axis=2).mean(axis=1)
 
 

@@ -10,7 +10,11 @@ that reaches the ceiling or, where none was scanned near it, the top of what was
 it, a height above any work surface, no counter or desk top attached behind its top edge, no
 surface facing the same way behind it (or, above the first story, a continuation of a wall of
 the story below in the same plane: a double-height wall whose top the scanner did not reach).
-A run must be long enough and come near the floor. Its plane faces the wall direction and
+A run must be long enough and come near the floor. The boxes of parametric models thicker than
+a wall (their furniture, :mod:`~meshplan.walls.solids`) are no evidence; pieces standing out
+of a longer wall (pilasters), pillars with the ceiling scanned all round them, free-standing
+panels and short fragments connected to no wall with their tops lost below door height are
+dropped (:func:`_pilasters`, :func:`_free_standing`). Its plane faces the wall direction and
 passes through the area-weighted median of the centroids across the wall; its rectangle spans
 its triangles along the wall and in height. Faces larger than half a box are split first, so
 that the centroids of parametric models (two triangles a wall) sample their surfaces. Coplanar rectangles of one direction
@@ -34,6 +38,7 @@ from ..geometry import FloatArray, IntArray, Mesh
 from ..orient import Orientation
 from .boxdbscan import box_dbscan
 from .evidence import (
+    CEILING_TOLERANCE_M,
     EDGE_WALL_MIN_SEEN_M,
     EDGE_WALL_MIN_TOP_M,
     FLOOR_CLEARANCE_M,
@@ -43,6 +48,7 @@ from .evidence import (
     Columns,
     StoryRaster,
     behind_top,
+    ceiling_behind,
     columns,
     floor_behind,
     group_weighted_median,
@@ -52,9 +58,12 @@ from .evidence import (
     runs,
     story_raster,
     subdivide,
+    top_around,
     top_attached,
+    work_surface_in_front,
 )
 from .params import WallParams
+from .solids import object_boxes
 
 #: A wall keeps the direction of its cluster unless its own direction differs from it
 #: significantly (besides ``snap_deg``), at this two-sided confidence: a short or wavy piece,
@@ -79,6 +88,16 @@ CONNECT_M = 0.3
 #: has been walked around: half of it, so that a wall with a short gap of floor seen through a
 #: door behind it is not taken for a free-standing panel.
 FLOOR_BEHIND_SHARE = 0.5
+
+#: Deepest protrusion of a pilaster (m; :func:`_pilasters`): pilasters, engaged columns, chimney
+#: breasts and the wardrobes and cupboards that stand against a wall stand out of it by 0.1-0.6 m;
+#: a room behind a wall, or a corridor, lies deeper, and a step of a wall has the wall behind it
+#: on one side only.
+PILASTER_DEPTH_M = 0.6
+
+#: A piece of wall and the wall behind it face the same way when their directions differ by at
+#: most this angle (degrees): a wall drifted by the scanner over its length bends by 3-8 degrees.
+PILASTER_PARALLEL_DEG = 10.0
 
 #: Vertical faces facing no wall direction (farther than the facing tolerance from every one)
 #: get a direction of their own when this much area (m2) faces within 5 degrees of one
@@ -507,7 +526,7 @@ def _segment_distance(s0: FloatArray, e0: FloatArray, s1: FloatArray, e1: FloatA
     return np.where(hit, 0.0, out)
 
 
-def _free_standing(rows: list[dict], raster: StoryRaster, floor: float, params: WallParams) -> np.ndarray:
+def _free_standing(rows: list[dict], raster: StoryRaster, floor: float, ceiling: float | None, params: WallParams) -> np.ndarray:
     """Rows of one story that are free-standing objects, not walls: pieces that, with the
     walls they connect to (within :data:`CONNECT_M`), span no more than ``free_standing_m``
     (a panel, a pillar, a desk's screen: the network of a room's walls is larger), that have
@@ -516,7 +535,25 @@ def _free_standing(rows: list[dict], raster: StoryRaster, floor: float, params: 
     and that are seen down to the floor (within :data:`FLOOR_CLEARANCE_M`: what the scanner went
     round it saw to its foot, where a wall seen only above a desk or a sill has its foot hidden
     by what stands against it). A short return at a corner or a door jamb's stub is connected
-    to a longer wall and stays."""
+    to a longer wall and stays.
+
+    Pillars and columns too, where the story has a ceiling: pieces connected to no piece
+    longer than ``free_standing_m`` (a room's walls are longer; a column's sides and a booth
+    built round it are not), all reaching the ceiling (within ``ceiling_reach_m``), seen down
+    to the floor, with the ceiling scanned behind their tops along :data:`FLOOR_BEHIND_SHARE`
+    of their length on both sides (beyond a wall's thickness and within ``free_standing_m``,
+    :data:`~meshplan.walls.evidence.CEILING_TOLERANCE_M`): the space goes on all round them,
+    their footprint is a hole in the scanned ceiling, where behind a wall lies its other face,
+    then another room or nothing seen.
+
+    And fragments: pieces connected to no piece longer than ``free_standing_m``, whose tops
+    stay below door height (:data:`EDGE_WALL_MIN_TOP_M`) and are lost in unscanned space
+    (nothing scanned around them higher, within ``context_m``): clutter seen through a door,
+    furniture, or a wall seen too little to tell that it bounds anything (a wall that meets a
+    soffit or a lower ceiling has that ceiling scanned above it). Where the story has no
+    ceiling, every wall's top may be lost below door height, and a fragment is dropped only
+    where a work surface stands against it along :data:`FLOOR_BEHIND_SHARE` of its length (a
+    desk's screen, a shelf's back, :func:`~meshplan.walls.evidence.work_surface_in_front`)."""
     n = len(rows)
     out = np.zeros(n, dtype=bool)
     if not n:
@@ -535,13 +572,74 @@ def _free_standing(rows: list[dict], raster: StoryRaster, floor: float, params: 
     normals = np.array([r["normal"] for r in rows])
     behind = floor_behind(raster, s, e, normals, params.max_wall_thickness_m, params.context_m)
     length = np.linalg.norm(e - s, axis=1)
+    around = top_around(raster, s, e, normals, params.max_wall_thickness_m, params.context_m)
+    desk = work_surface_in_front(raster, s, e, normals, floor, params.max_work_surface_m)
+    if ceiling is not None:
+        # the ceiling scanned on both sides of each piece, beyond a wall's thickness
+        at_ceiling = ceiling - CEILING_TOLERANCE_M
+        over = np.minimum(
+            ceiling_behind(raster, s, e, normals, params.max_wall_thickness_m, params.free_standing_m, at_ceiling),
+            ceiling_behind(raster, s, e, -normals, params.max_wall_thickness_m, params.free_standing_m, at_ceiling),
+        )
     for c in np.unique(comp):
         members = np.flatnonzero(comp == c)
         pts = np.r_[s[members], e[members]]
         span = float(np.max(np.linalg.norm(pts[:, None] - pts[None], axis=2)))
-        share = float((behind[members] * length[members]).sum() / max(length[members].sum(), 1e-12))
+        weights = length[members] / max(length[members].sum(), 1e-12)
+        share = float((behind[members] * weights).sum())
         foot = all(rows[i]["bottom"] <= floor + FLOOR_CLEARANCE_M for i in members)
-        out[members] = span <= params.free_standing_m and share >= FLOOR_BEHIND_SHARE and foot
+        walked_round = span <= params.free_standing_m and share >= FLOOR_BEHIND_SHARE
+        pillar = (
+            ceiling is not None
+            and float(length[members].max()) <= params.free_standing_m
+            and all(rows[i]["top"] >= ceiling - params.ceiling_reach_m for i in members)
+            and float((over[members] * weights).sum()) >= FLOOR_BEHIND_SHARE
+        )
+        # a fragment: connected to no wall of a room, its top below door height
+        # (EDGE_WALL_MIN_TOP_M) and lost in unscanned space (nothing scanned around it higher,
+        # CEILING_TOLERANCE_M): clutter or furniture seen through a door, or a wall seen too
+        # little to tell that it bounds anything. Without a scanned ceiling the height alone
+        # says nothing (a story scanned to 1.2-1.8 m has every wall's top lost below door height)
+        fragment = (
+            float(length[members].max()) <= params.free_standing_m
+            and all(rows[i]["top"] < floor + EDGE_WALL_MIN_TOP_M for i in members)
+            and all(around[i] < rows[i]["top"] + CEILING_TOLERANCE_M for i in members)
+            # without a ceiling, only where it rises out of a desk or a counter (a screen, a
+            # shelf's back): a work surface against it along most of its length
+            and (ceiling is not None or float((desk[members] * weights).sum()) >= FLOOR_BEHIND_SHARE)
+        )
+        out[members] = (foot and (walked_round or pillar)) or fragment
+    return out
+
+
+def _pilasters(rows: list[dict], params: WallParams) -> np.ndarray:
+    """Rows of one story that stand out of a wall: pieces no longer than ``free_standing_m``
+    in front of a longer wall facing the same way (within :data:`PILASTER_PARALLEL_DEG`), more
+    than half the DBSCAN box's depth and at most :data:`PILASTER_DEPTH_M` in front of its plane
+    along their whole length, with that wall going on beyond both of their ends (by a column,
+    half a box length). They are the fronts of pilasters, engaged columns, chimney breasts or
+    cupboards against the wall: the wall behind bounds the room and is drawn across them. A step
+    of a wall (the wall behind on one side only) and a niche (a piece behind the wall) stay."""
+    n = len(rows)
+    out = np.zeros(n, dtype=bool)
+    if n < 2:
+        return out
+    cos_par = np.cos(np.radians(PILASTER_PARALLEL_DEG))
+    margin = params.box_length_m / 2
+    nor = np.array([r["normal"] for r in rows], dtype=np.float64)
+    tan = np.c_[-nor[:, 1], nor[:, 0]]
+    off = np.array([r["offset"] for r in rows])
+    lo, hi = np.array([r["u_min"] for r in rows]), np.array([r["u_max"] for r in rows])
+    length = hi - lo
+    for i in np.flatnonzero(length <= params.free_standing_m):
+        ends = np.array(_ends(rows[i]))  # (2, 2)
+        depth = ends @ nor.T - off[None, :]  # how far each end stands in front of each plane
+        u = ends @ tan.T
+        ok = (length > length[i]) & (nor @ nor[i] >= cos_par)
+        ok &= np.all((depth > params.box_depth_m / 2) & (depth <= PILASTER_DEPTH_M), axis=0)
+        ok &= (u.min(axis=0) >= lo + margin) & (u.max(axis=0) <= hi - margin)
+        ok[i] = False
+        out[i] = bool(ok.any())
     return out
 
 
@@ -578,6 +676,9 @@ def find_flat_walls(mesh: Mesh, orientation: Orientation, params: WallParams | N
     # tri.mean(axis=1) and |(t1 - t0) x (t2 - t0)| / 2, the same numbers in one compiled pass
     centroids, areas = centroids_areas(np.ascontiguousarray(tri))
     face_story = orientation.face_story[parent] if split else orientation.face_story
+    # the objects of a parametric model (boxes thicker than a wall) are no wall evidence
+    objects = object_boxes(mesh, params.max_wall_thickness_m)
+    objects = objects[parent] if split else objects
     # the faces facing each wall direction, the same in every story
     facing = [normals @ np.array([d[0], 0.0, d[1]]) >= cos_tol for d in dirs]
     piece_segment = np.full(len(tri), -1, dtype=np.int64)
@@ -589,7 +690,8 @@ def find_flat_walls(mesh: Mesh, orientation: Orientation, params: WallParams | N
         ceiling = story.ceiling if story.ceiling_found else None
         # without a scanned ceiling the assumed one bounds nothing: the story's faces go up to
         # its top boundary (the next story, or the top of the scan)
-        in_story = (face_story == story.index) & (centroids[:, 1] > story.floor) & (centroids[:, 1] < (story.ceiling if ceiling is not None else story.top))
+        story_top = story.ceiling if ceiling is not None else story.top
+        in_story = (face_story == story.index) & ~objects & (centroids[:, 1] > story.floor) & (centroids[:, 1] < story_top)
         story_faces = np.flatnonzero(face_story == story.index)
         raster = story_raster(tri[story_faces], normals[story_faces], story.floor, ceiling)
         height = params.box_height_m or story.height
@@ -680,7 +782,7 @@ def find_flat_walls(mesh: Mesh, orientation: Orientation, params: WallParams | N
                 if present[j]
             )
         found = _merge(found, params.box_depth_m / 2, params.merge_gap_m)
-        free = _free_standing(found, raster, story.floor, params)
+        free = _free_standing(found, raster, story.floor, ceiling, params) | _pilasters(found, params)
         for r in (r for r, f in zip(found, free) if f):
             for sid in r["segments"]:
                 seg_kept[sid] = False

@@ -104,7 +104,10 @@ class WallParams:
         Largest extent of a free-standing object taken for walls: a piece of wall that, with
         the walls it connects to, spans no more than this and has the floor scanned right
         behind it is a panel, a pillar or a screen (0.3-1 m), not a wall. A room's walls span
-        more; a short return or a door jamb's stub connects to them.
+        more; a short return or a door jamb's stub connects to them. It is also the longest
+        piece of a group connected to no longer wall that is taken for a column (the ceiling
+        scanned all round it) or a fragment (its top lost below door height), and the longest
+        front standing out of a wall that is taken for a pilaster (``walls.flat``).
     """
 
     _parameter_constraints: ClassVar[dict[str, Constraint]] = {
