@@ -50,14 +50,17 @@ REAL_ROOMS = {
     # splits it there)
     "roomplan_sekhar_library_parametric.ply": (0.85, 0.08, 1),
     "roomplan_sekhar_small_room_parametric.ply": (0.95, 0.01, 1),
-    "tango_rainfiel_office_open.ply": (0.8, 0.02, 1),
+    # partial (the truth follows the footprint of floor, desks and low surfaces): a desk's
+    # screen, no wall, once cut the room where the truth's outline happens to run (0.5 %)
+    "tango_rainfiel_office_open.ply": (0.8, 0.04, 1),
     "tango_rainfiel_room_closed.ply": (0.93, 0.02, 1),
 }
 
-#: Pooled over every truth scan: room recall and median area error of the matched rooms
-#: (reached: 18 of 20, median 1.6 %).
+#: Pooled over every truth scan: room recall and median area error of the matched rooms, the
+#: numbers of issue 9 (reached: 18 of 20, median 2.6 %; 1.6 % while a desk's screen was a wall
+#: cutting the open office's room where its partial truth ends).
 POOLED_RECALL = 0.90
-POOLED_MEDIAN_AREA_ERROR = 0.025
+POOLED_MEDIAN_AREA_ERROR = 0.03
 
 
 def _score(name: str) -> dict:
