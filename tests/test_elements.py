@@ -304,3 +304,31 @@ def test_opening_confidence_reads_the_detector_limits(computed):
     for i in doors:
         assert ("unusual size" in narrow[i].confidence_reason) == (i in wide)
         assert (narrow[i].confidence == "low") or i not in wide
+
+
+def test_a_room_wrapping_round_a_walls_end_does_not_make_it_interior():
+    """An outer wall whose end pokes into the corner of an L-shaped room has that room within a
+    probe's slack of its outer side only near the end: the wall is still exterior (RoomPlan's
+    walls overshoot their corners: 13 of the library's 39 were drawn as interior walls)."""
+    from meshplan.orient import Story
+    from meshplan.plan.elements import SIDE_PROBE_M, SIDE_SLACK_M, wall_elements
+    from meshplan.plan.rooms import Room
+    from meshplan.walls.physical import PhysicalWall
+
+    # the wall along x at z = 0 (body 0.15 m, centre line at z = 0): its normal (0, -1), so
+    # rooms[0] lie at z < 0; the room lies at z > 0 and wraps round the east end from x = 3.75
+    wall = PhysicalWall(0, (0,), (0.0, 0.0), (4.0, 0.0), 0.15, False, 0.0, 2.5)
+    assert np.allclose(wall.normal, [0.0, -1.0])
+    room = Polygon([(0, 0.075), (3.75, 0.075), (3.75, -3), (6, -3), (6, 3), (0, 3)])
+    (behind,) = shapely_points_near(room, wall, SIDE_PROBE_M, SIDE_SLACK_M)
+    assert behind, "the test's room must come within a probe's slack behind the wall near its end"
+    story = Story(0, 0.0, 2.5, True, -np.inf, np.inf)
+    (out,) = wall_elements((wall,), (Room(0, "Room 1", room, "walls"),), (story,), 0.1, 0.3)
+    assert out.rooms == ((), (0,)) and out.exterior
+
+
+def shapely_points_near(room, wall, probe_m, slack_m):
+    """Whether the probe behind the wall at 90 % of its length lies within the slack of ``room``."""
+    a, b = np.asarray(wall.start), np.asarray(wall.end)
+    p = a + 0.9 * (b - a) + (wall.thickness / 2 + probe_m) * wall.normal
+    return (room.distance(Point(p)) <= slack_m,)

@@ -68,7 +68,8 @@ SIDE_PROBE_M = 0.25
 #: ... and a room counts when its polygon comes this close (m) to a probe: room polygons closed
 #: by the floor end where the floor scan does, 0.1-0.2 m short of the wall behind furniture.
 SIDE_SLACK_M = 0.2
-#: Probes along a wall, as shares of its length (a long corridor wall has several rooms behind).
+#: Probes along a wall, as shares of its length (a long corridor wall has several rooms behind),
+#: those within ``SIDE_PROBE_M + SIDE_SLACK_M`` of an end left out (the middle one at least kept).
 SIDE_SAMPLES = np.linspace(0.1, 0.9, 9)
 
 #: A room is a closet (storage) below this floor area (m2): a walk-in closet or a store room;
@@ -373,7 +374,11 @@ def wall_elements(
     out = []
     for w in physical:
         a, b = np.asarray(w.start), np.asarray(w.end)
-        base = a[None, :] + SIDE_SAMPLES[:, None] * (b - a)[None, :]
+        # not near the ends: there a room beyond the corner, wrapping round the wall's end,
+        # lies within the slack of a probe on the wall's outer side
+        t = SIDE_SAMPLES[np.minimum(SIDE_SAMPLES, 1.0 - SIDE_SAMPLES) * w.length >= SIDE_PROBE_M + SIDE_SLACK_M]
+        t = t if len(t) else np.array([0.5])
+        base = a[None, :] + t[:, None] * (b - a)[None, :]
         n = w.normal
         reach = w.thickness / 2 + SIDE_PROBE_M
         front = _rooms_near(rooms, w.story, base + reach * n, SIDE_SLACK_M)
