@@ -17,6 +17,13 @@ across it, positive into the room the face was scanned from):
   lintel, runs up to the ceiling with the floor seen through it beyond the wall. It is a window
   when it has a sill and a head and straight edges on all four sides. Scan holes are ragged and
   are left alone.
+* **recesses**: a window whose glazing (a blind, a lattice) was scanned, set back in a reveal
+  behind the face, leaves no gap in the slab. The face's own plane and the surfaces behind it
+  that face the room are rasterized apart; a region behind the face where its plane is missing
+  is a window when it has a window's size above a sill, the face's plane all round it (its
+  frame), and a step at its edge: the depth drops from the frame to the glazing across the
+  edge by a reveal's depth and by several times the face's own warp (a hollow of a warped mesh
+  slopes into the region instead).
 * **panels**: parametric models (RoomPlan, Quest scene models) model a door or a window as a
   separate box or quad in the wall plane, over an uncut wall. A separate connected piece of the
   mesh that lies in the wall's slab, covers its rectangle, stands on the floor, has a door's
@@ -79,6 +86,48 @@ PANEL_THICKNESS_M = 0.05
 #: modelled full-height glazing has sills of 0.1-0.2 m).
 PANEL_SILL_MIN_M = 0.1
 
+#: A window's glazing (or its blind, its lattice) stands back from the inner face of its wall in
+#: a reveal: a surface facing the room at least this far (m) behind the face's plane, where the
+#: plane itself was not scanned, is looked at as a window too (less is plaster and scan noise).
+#: On the two real scans with such windows this works from 3 to 3.5 cm only (at 2.5 cm the
+#: tatami room's recess joins a recessed strip past the wall's end; at 4 cm the scattered
+#: samples of both glazings fall short): the region is found this way, the step test below
+#: decides, and no value in that range adds a false window on the real or synthetic scans.
+RECESS_MIN_M = 0.03
+#: ... and such a recess is a window when the surface set back in it covers at least this share
+#: of its rectangle (glazing, blinds and lattices scan patchily: reflections, slats) ...
+RECESS_FILL = 0.5
+#: ... and the face's plane was scanned along at least this share of each of its four sides (its
+#: frame: sill, head and jambs in the wall's plane; a desk's knee space has no sill, a step in
+#: the wall no jambs).
+RECESS_FRAME_SHARE = 0.75
+
+#: A recess within this distance (m) of a door or window found in the same face is part of it
+#: (the leaf or the room beyond seen through a doorway, the reveal around a window's hole), not
+#: a window of its own.
+RECESS_APART_M = 0.3
+
+#: A reveal is a step, where a hollow of the scan is a slope: read two cells (of
+#: ``opening_cell_m``) from a recess's edge on either side (past the edge cell, which holds
+#: both surfaces), the frame outside it and the glazing inside it are this many cells apart ...
+RECESS_STEP_CELLS = 2
+#: ... and the glazing stands at least this far (m) behind the frame there. A window's frame or
+#: sash sets its glass back 4 cm or more from the inner face (the shallowest reveal measured,
+#: glass and blinds of a HoloLens office, steps 5.5 cm); a panel set 2-3 cm into the wall (a
+#: sliding door in its track) and the smooth warp of a mesh (HoloLens and the synthetic scans
+#: bend by 0.5-2 cm over 0.3-3 m, sloping into a hollow over all its width) step less over
+#: those 15 cm, except in the strongest warps, which the next test catches.
+RECESS_STEP_M = 0.04
+#: ... and at least this many times the face's own warp (the robust standard deviation of the
+#: depth of its surface outside the recesses): a hollow of a smooth random warp drops a few of
+#: its standard deviations below its surroundings (at most 2.6 in synthetic scans whose warp is
+#: at the strongest, 2 cm), while a reveal's step is set by the window, not the warp (4 to 5.5
+#: times on the scanned walls with glazed reveals); three standard deviations, the usual bound
+#: of noise.
+RECESS_STEP_SPREAD = 3.0
+#: The standard deviation of a normal distribution is this times its median absolute deviation.
+MAD_TO_SIGMA = 1.4826
+
 #: Tallest common door head above the floor (m; heads are 1.9-2.4 m): beside a gap whose lintel
 #: the scan missed, a wall rises above it, while wardrobes and partition screens (2.0-2.2 m) do not;
 #: a gap whose "lintel" was scanned higher is no door (it runs up into the rounded-off corner
@@ -103,7 +152,7 @@ class Candidate:
     u_max: float
     bottom: float
     top: float
-    how: str  # "gap", "no lintel" (the scan missed the lintel), "corner" or "panel"
+    how: str  # "gap", "no lintel" (the scan missed the lintel), "corner", "panel" or "recess" (glazing set back)
 
 
 class WallEvidence:
@@ -331,25 +380,34 @@ def _gaps(ev: WallEvidence, w: int, floor: float, ceiling: float) -> list[Candid
     tri = tv[keep]
     if not len(tri):
         return []
-    pts = _samples(tri, cell)
-    pd = pts @ n3 - off
-    pu, py = pts @ t3, pts[:, 1]
     ncol = max(1, int(np.ceil((hi - lo) / cell)))
     nrow = max(1, int(np.ceil((ceiling - floor) / cell)))
-    inside = (pd >= far) & (pd <= near) & (pu >= lo) & (pu < hi) & (py >= floor) & (py < ceiling)
-    c = np.clip(np.floor((pu[inside] - lo) / cell).astype(np.int64), 0, ncol - 1)
-    r = np.clip(np.floor((py[inside] - floor) / cell).astype(np.int64), 0, nrow - 1)
-    grid = np.zeros((nrow, ncol), dtype=bool)
-    grid[r, c] = True
-    grid = ndimage.binary_closing(grid, structure=np.ones((2, 2)), border_value=1)
     margin = int(np.ceil(params.opening_margin_m / cell))
-    grid[:margin] = True
-    grid[nrow - margin :] = True
-    # a corner is a jamb: the perpendicular wall closes the raster there
-    if left_corner is not None:
-        grid[:, :EDGE_CELLS] = True
-    if right_corner is not None:
-        grid[:, ncol - EDGE_CELLS :] = True
+
+    def raster(points: FloatArray, front: float, back: float) -> np.ndarray:
+        """Cells holding a point between ``back`` and ``front`` across the face."""
+        pd = points @ n3 - off
+        pu, py = points @ t3, points[:, 1]
+        inside = (pd >= back) & (pd <= front) & (pu >= lo) & (pu < hi) & (py >= floor) & (py < ceiling)
+        c = np.clip(np.floor((pu[inside] - lo) / cell).astype(np.int64), 0, ncol - 1)
+        r = np.clip(np.floor((py[inside] - floor) / cell).astype(np.int64), 0, nrow - 1)
+        g = np.zeros((nrow, ncol), dtype=bool)
+        g[r, c] = True
+        return g
+
+    def closed(g: np.ndarray) -> np.ndarray:
+        g = ndimage.binary_closing(g, structure=np.ones((2, 2)), border_value=1)
+        g[:margin] = True
+        g[nrow - margin :] = True
+        # a corner is a jamb: the perpendicular wall closes the raster there
+        if left_corner is not None:
+            g[:, :EDGE_CELLS] = True
+        if right_corner is not None:
+            g[:, ncol - EDGE_CELLS :] = True
+        return g
+
+    pts = _samples(tri, cell)
+    grid = closed(raster(pts, near, far))
 
     verts = tri.reshape(-1, 3)
     vd = verts @ n3 - off
@@ -357,7 +415,128 @@ def _gaps(ev: WallEvidence, w: int, floor: float, ceiling: float) -> list[Candid
     vu, vy = verts @ t3, verts[:, 1]
     floor_cols = _floor_beyond(ev, w, n3, t3, off, floor, lo, ncol, cell, params)
     frame = _Frame(grid, lo, floor, ceiling, cell, margin, vu, vy, w, left_corner is not None, right_corner is not None)
-    return _doors(frame, walls, floor_cols, params) + _windows(frame, walls, params)
+    found = _doors(frame, walls, floor_cols, params) + _windows(frame, walls, params)
+    # windows whose glazing was scanned, set back in a reveal: holes in the face's own plane
+    # over a surface behind it that faces the room (the wall's far face faces away)
+    room = ev.normals[cand][keep] @ n3 > ev.cos
+    back = tri[room & (_max3(tri @ n3 - off) < -RECESS_MIN_M)]
+    if len(back):
+        face = raster(pts, near, -RECESS_MIN_M)
+        recess = ndimage.binary_closing(raster(_samples(back, cell), -RECESS_MIN_M, far), structure=np.ones((2, 2))) & ~face
+        depth = _cell_depths(_samples(tri[room], cell), n3, t3, off, lo, floor, cell, recess.shape, (far, near))
+        found += [c for c in _recesses(frame, face, recess, depth, walls, params) if not any(_overlap(c, o, RECESS_APART_M) for o in found)]
+    return found
+
+
+def _overlap(a: Candidate, b: Candidate, margin: float = 0.0) -> bool:
+    """Whether two openings of one face overlap, or come within ``margin`` (m) of each other."""
+    return a.u_min < b.u_max + margin and b.u_min < a.u_max + margin and a.bottom < b.top + margin and b.bottom < a.top + margin
+
+
+def _cell_depths(
+    points: FloatArray, n3: FloatArray, t3: FloatArray, off: float, lo: float, floor: float, cell: float, shape: tuple[int, int], d_range: tuple[float, float]
+) -> tuple[IntArray, IntArray, FloatArray]:
+    """The cell (row, column) of a face's raster each of ``points`` within ``d_range`` across the
+    face falls in, and its depth (m, positive into the room)."""
+    nrow, ncol = shape
+    pd = points @ n3 - off
+    c = np.floor((points @ t3 - lo) / cell)
+    r = np.floor((points[:, 1] - floor) / cell)
+    ok = (pd >= d_range[0]) & (pd <= d_range[1]) & (c >= 0) & (c < ncol) & (r >= 0) & (r < nrow)
+    return r[ok].astype(np.int64), c[ok].astype(np.int64), pd[ok]
+
+
+def _step(region: np.ndarray, depth: tuple[IntArray, IntArray, FloatArray]) -> float:
+    """How far (m) the surface two cells inside ``region`` (a recess) stands behind the surface
+    two cells outside it (its frame): the median depths of the samples ``depth`` (row, column,
+    depth) at :data:`RECESS_STEP_CELLS` from its edge on either side; ``-inf`` without samples
+    on both."""
+    rows, cols = np.nonzero(region)
+    pad = RECESS_STEP_CELLS + 1
+    r0, c0 = max(int(rows.min()) - pad, 0), max(int(cols.min()) - pad, 0)
+    r1, c1 = int(rows.max()) + pad + 1, int(cols.max()) + pad + 1
+    box = region[r0:r1, c0:c1]
+    inside = ndimage.distance_transform_cdt(box, metric="chessboard")
+    outside = ndimage.distance_transform_cdt(~box, metric="chessboard")
+    r, c, d = depth
+    sel = (r >= r0) & (r < r0 + box.shape[0]) & (c >= c0) & (c < c0 + box.shape[1])
+    r, c, d = r[sel] - r0, c[sel] - c0, d[sel]
+    glass = d[box[r, c] & (inside[r, c] == RECESS_STEP_CELLS)]
+    frame = d[~box[r, c] & (outside[r, c] == RECESS_STEP_CELLS)]
+    if not len(glass) or not len(frame):
+        return -np.inf
+    return float(np.median(frame) - np.median(glass))
+
+
+def _spread(f: _Frame, recess: np.ndarray, depth: tuple[IntArray, IntArray, FloatArray], walls: FlatWalls) -> float:
+    """The face's warp: the robust standard deviation (m) of the depth of the samples ``depth``
+    (row, column, depth) within the wall's extent and outside the ``recess`` cells."""
+    r, c, d = depth
+    u = f.lo + (c + 0.5) * f.cell
+    d = d[(u > walls.u_min[f.wall]) & (u < walls.u_max[f.wall]) & ~recess[r, c]]
+    if not len(d):
+        return 0.0
+    return float(MAD_TO_SIGMA * np.median(np.abs(d - np.median(d))))
+
+
+def _recesses(
+    f: _Frame, face: np.ndarray, recess: np.ndarray, depth: tuple[IntArray, IntArray, FloatArray], walls: FlatWalls, params: PlanParams
+) -> list[Candidate]:
+    """Windows whose glazing (a blind, a lattice) was scanned in a reveal: each region of
+    ``recess`` (cells where a surface facing the room stands back behind the face, and the face
+    itself was not scanned) of a window's size and shape, above a sill, and framed by the face
+    (``face``: cells where the face's plane was scanned) on :data:`RECESS_FRAME_SHARE` of each
+    of its four sides, with a step at its edge (:func:`_step`) of at least
+    :data:`RECESS_STEP_M` and :data:`RECESS_STEP_SPREAD` times the face's warp (:func:`_spread`).
+
+    Parameters
+    ----------
+    f
+        The face's raster and frame.
+    face, recess
+        ``(nrow, ncol)`` cells of the face's plane and of surfaces set back behind it.
+    depth
+        ``(rows, cols, depths)`` of the samples of the room-facing surfaces in the face's slab.
+    walls, params
+        The walls (the face's extent) and the size limits of windows.
+
+    Returns
+    -------
+    The windows found, ``how="recess"``.
+    """
+    cell, lo, floor = f.cell, f.lo, f.floor
+    nrow, ncol = recess.shape
+    labels, n = ndimage.label(recess)
+    if n == 0:
+        return []
+    framed = ndimage.binary_dilation(face, structure=np.ones((3, 3)))
+    tol = EDGE_CELLS * cell
+    spread: float | None = None  # the face's warp, measured when a recess needs it
+    out = []
+    for k, (rs, cs) in enumerate(ndimage.find_objects(labels), start=1):
+        left, right = lo + cs.start * cell, lo + cs.stop * cell
+        low, high = floor + rs.start * cell, floor + rs.stop * cell
+        width, height = right - left, high - low
+        if left < walls.u_min[f.wall] + tol or right > walls.u_max[f.wall] - tol:
+            continue  # a window set back in a wall has the wall on both sides of it
+        if not (params.window_width_m[0] <= width <= params.window_width_m[1]) or height < params.window_height_m or width * height < params.window_area_m2:
+            continue
+        if low - floor < params.window_sill_m or high > f.ceiling - params.opening_margin_m:
+            continue
+        if (labels[rs, cs] == k).mean() < RECESS_FILL:
+            continue
+        # the frame: the face's plane scanned along each of the four sides, just outside
+        below, above = framed[rs.start - 1, cs] if rs.start > 0 else np.zeros(0), framed[rs.stop, cs] if rs.stop < nrow else np.zeros(0)
+        before, after = framed[rs, cs.start - 1] if cs.start > 0 else np.zeros(0), framed[rs, cs.stop] if cs.stop < ncol else np.zeros(0)
+        if min((float(side.mean()) if side.size else 0.0) for side in (below, above, before, after)) < RECESS_FRAME_SHARE:
+            continue  # no frame in the wall's plane all round: a recessed piece of wall, a niche, a desk's knee space
+        if spread is None:
+            spread = _spread(f, recess, depth, walls)
+        step = _step(labels == k, depth)
+        if step < max(RECESS_STEP_M, RECESS_STEP_SPREAD * spread):
+            continue  # no step at its edge, or none the face's own warp cannot make: not a reveal
+        out.append(Candidate("window", f.wall, left, right, low, high, "recess"))
+    return out
 
 
 @dataclass(frozen=True)
