@@ -179,6 +179,43 @@ def test_slicing_is_exact_on_a_tilted_triangle():
         plane_heights(0, 1, 0)
 
 
+def _former_slice_mesh(tri, h):
+    """``slice_mesh`` before it read the corners by flat index (issue 15): the reference."""
+    y = tri[:, :, 1]
+    first = np.searchsorted(h, y.min(axis=1), side="right")
+    count = np.searchsorted(h, y.max(axis=1), side="right") - first
+    faces = np.repeat(np.arange(len(tri)), count)
+    level = np.repeat(first, count) + np.arange(len(faces)) - np.repeat(np.cumsum(count) - count, count)
+    d = y[faces] - h[level][:, None]
+    above = d >= 0
+    n_above = above.sum(axis=1)
+    cut = (n_above == 1) | (n_above == 2)
+    faces, level, d, above, n_above = faces[cut], level[cut], d[cut], above[cut], n_above[cut]
+    odd = np.where(n_above == 1, np.argmax(above, axis=1), np.argmin(above, axis=1))
+    rows = np.arange(len(faces))
+    t = tri[faces]
+    p0, d0 = t[rows, odd][:, [0, 2]], d[rows, odd]
+    seg = np.stack([p0 + (t[rows, u][:, [0, 2]] - p0) * (d0 / (d0 - d[rows, u]))[:, None] for u in ((odd + 1) % 3, (odd + 2) % 3)], axis=1)
+    real = np.any(seg[:, 0] != seg[:, 1], axis=1)
+    return seg[real], level[real], faces[real]
+
+
+@pytest.mark.parametrize("kind", ["grid", "noise"])
+def test_slicing_gives_the_former_segments_bit_for_bit(kind):
+    """Vertices on a grid of the plane spacing (corners exactly on planes, edges in them) and
+    random triangles: the same segments, levels and faces as the former implementation."""
+    rng = np.random.default_rng(0)
+    if kind == "grid":
+        tri, h = rng.integers(0, 6, size=(20_000, 3, 3)) * 0.5, np.arange(0.0, 3.01, 0.5)
+    else:
+        tri, h = rng.normal(size=(20_000, 3, 3)), np.linspace(-1.0, 1.0, 9)
+    s = slice_mesh(tri, h)
+    seg, level, face = _former_slice_mesh(tri, h)
+    np.testing.assert_array_equal(s.segments, seg)
+    np.testing.assert_array_equal(s.level, level)
+    np.testing.assert_array_equal(s.face, face)
+
+
 def test_slicing_an_edge_on_a_plane_gives_it_once_from_the_triangle_below():
     """The module's rule: a vertex exactly on a plane counts as above it, so an edge lying in a
     plane comes once, from the triangle below it, and a vertex touching it gives nothing."""

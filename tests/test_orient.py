@@ -165,3 +165,73 @@ def test_a_gltf_file_declares_y_up(tmp_path):
         write_mesh(Mesh(v, f), tmp_path / f"room{ext}")
         up = load_mesh(tmp_path / f"room{ext}").stats.declared_up
         assert (up is None) if want is None else np.allclose(up, want)
+
+
+# --- faster passes over the faces, the same numbers (issue 15) ----------------------------------
+
+
+def _former_surface_samples(mesh, faces, spacing, max_samples=10_000):
+    """The sampling of ``meshplan.orient.gravity`` before it kept the one-point faces' points."""
+    areas = mesh.face_areas[faces]
+    k = np.clip(np.ceil(areas / spacing**2), 1, max_samples).astype(np.int64)
+    rep = np.repeat(faces, k)
+    j = np.arange(len(rep)) - np.repeat(np.cumsum(k) - k, k)
+    g = 1.32471795724474602596
+    u = (0.5 + j / g) % 1.0
+    v = (0.5 + j / g**2) % 1.0
+    fold = u + v > 1.0
+    u[fold], v[fold] = 1.0 - u[fold], 1.0 - v[fold]
+    single = np.repeat(k == 1, k)
+    u[single], v[single] = 1.0 / 3.0, 1.0 / 3.0
+    tri = mesh.vertices[mesh.faces[rep]]
+    pts = tri[:, 0] + u[:, None] * (tri[:, 1] - tri[:, 0]) + v[:, None] * (tri[:, 2] - tri[:, 0])
+    return pts, mesh.face_areas[rep] / np.repeat(k, k)
+
+
+def test_surface_samples_are_the_former_ones_bit_for_bit():
+    from meshplan.orient.gravity import _single_samples, _surface_samples
+
+    rng = np.random.default_rng(3)
+    small = rng.normal(size=(600, 3))
+    # metre-sized triangles (a parametric wall) among 5 cm ones
+    big = np.array([[0, 0, 0], [3, 0, 0], [0, 2.5, 0], [3, 2.5, 0], [0, 0, 4.0]])
+    vertices = np.r_[big, small * 0.05 + rng.uniform(0, 4, size=(1, 3))]
+    faces = np.r_[[[0, 1, 2], [1, 3, 2], [0, 4, 1]], rng.integers(5, len(vertices), size=(400, 3))]
+    mesh = Mesh(vertices, faces)
+    for sel in (np.arange(mesh.n_faces), np.array([7, 0, 300, 2, 2, 11]), np.zeros(0, np.int64)):
+        for single in (None, _single_samples(mesh)):
+            pts, w = _surface_samples(mesh, sel, 0.1, single)
+            old_pts, old_w = _former_surface_samples(mesh, sel, 0.1)
+            np.testing.assert_array_equal(pts, old_pts)
+            np.testing.assert_array_equal(w, old_w)
+
+
+def test_face_components_number_pieces_as_scipy_does():
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    from meshplan.orient.facing import face_components
+
+    rng = np.random.default_rng(7)
+    for _ in range(30):
+        n_vertices = int(rng.integers(3, 300))
+        faces = rng.integers(0, n_vertices, size=(int(rng.integers(1, 150)), 3))
+        rows, cols = np.r_[faces[:, 0], faces[:, 1]], np.r_[faces[:, 1], faces[:, 2]]
+        graph = coo_matrix((np.ones(len(rows), dtype=np.int8), (rows, cols)), shape=(n_vertices, n_vertices))
+        expected = connected_components(graph, directed=False)[1][faces[:, 0]]
+        np.testing.assert_array_equal(face_components(faces, n_vertices), expected)
+    assert face_components(np.zeros((0, 3), np.int64), 5).shape == (0,)
+
+
+def test_thin_products_with_one_blas_thread_are_the_same_bits():
+    from threadpoolctl import threadpool_limits
+
+    from meshplan.geometry import thin_product, transform_points
+
+    rng = np.random.default_rng(11)
+    points = rng.normal(size=(60_000, 3)) * 10.0
+    m = homogeneous(np.linalg.qr(rng.normal(size=(3, 3)))[0], [1.0, -2.0, 3.0])
+    with threadpool_limits(limits=2, user_api="blas"):
+        expected = points @ m[:3, :3].T
+    np.testing.assert_array_equal(thin_product(points, m[:3, :3].T), expected)
+    np.testing.assert_array_equal(transform_points(m, points), expected + m[:3, 3])

@@ -105,3 +105,31 @@ def test_rasterize_segments_counts_each_slice_once(n_levels):
     np.testing.assert_array_equal(got, _counts_by_sorting(segments, level, sheet))
     assert got.dtype == np.int32 and got.shape == sheet.raster_shape
     assert rasterize_segments(np.zeros((0, 2, 2)), np.zeros(0, int), sheet).shape == sheet.raster_shape
+
+
+# --- the filters of the drawings (issue 15: the same pixels, faster) ---------------------------
+
+
+@pytest.mark.parametrize("shape", [(1, 1), (1, 9), (9, 1), (40, 31), (40, 31, 4)])
+@pytest.mark.parametrize("size", [2, 3])
+def test_grow_max_is_scipys_maximum_filter(shape, size):
+    from scipy.ndimage import maximum_filter
+
+    from meshplan.render.sheet import grow_max
+
+    rng = np.random.default_rng(len(shape) * 10 + size)
+    image = ((rng.random(shape) < 0.1) * rng.integers(1, 256, size=shape)).astype(np.uint8)
+    expected = maximum_filter(image, size=(size, size) + (1,) * (image.ndim - 2))
+    np.testing.assert_array_equal(grow_max(image, size), expected)
+
+
+def test_ink_rgba_looks_up_every_count():
+    from meshplan.render.sheet import ink_rgba
+
+    counts = np.arange(300, dtype=np.int32).reshape(15, 20)
+    out = ink_rgba(counts, 0.5, width_px=1)
+    assert out.shape == (15, 20, 4) and out.dtype == np.uint8
+    k = np.minimum(counts, 255)
+    np.testing.assert_array_equal(out[..., 3], np.round(255 * (1.0 - 0.5**k)).astype(np.uint8))
+    np.testing.assert_array_equal(out[..., :3], np.broadcast_to(np.array([0x14, 0x21, 0x3D], np.uint8), (15, 20, 3)))
+

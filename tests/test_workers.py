@@ -183,3 +183,23 @@ def test_workers_make_the_same_files_as_the_run_alone(apartment):
     assert {"oriented.glb", "story-0.glb", "flat-walls-0.glb", "drafting-0.dxf", "pen-and-ink-0.svg", "report.html"} <= set(here)
     for name in here:
         assert here[name] == there[name], name
+
+
+def _priority() -> int:
+    return os.getpriority(os.PRIO_PROCESS, 0)
+
+
+def test_workers_draw_at_the_runs_priority_where_allowed():
+    """A worker warms up at low priority, then draws at the run's (issue 15: left niced, on a
+    busy machine the drawings got a fraction of the CPU); without the right to raise a priority
+    back, it stays low, as before."""
+    import resource
+
+    from meshplan.export import _WARM_UP_NICE, RenderPool
+
+    mine = _priority()
+    may_raise = os.geteuid() == 0 or 20 - resource.getrlimit(resource.RLIMIT_NICE)[0] <= mine
+    with RenderPool(2) as pool:
+        assert pool.executor is not None
+        got = {pool.executor.submit(_priority).result(timeout=60) for _ in range(4)}
+    assert got == ({mine} if may_raise else {min(mine + _WARM_UP_NICE, 19)})

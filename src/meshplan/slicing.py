@@ -57,6 +57,12 @@ def plane_heights(floor: float, ceiling: float, n: int) -> FloatArray:
     return floor + (ceiling - floor) * np.arange(n + 1) / n
 
 
+#: The corner alone on its side of a plane, indexed by which corners lie at or above it (bit i
+#: for corner i): the one above when one is, the one below when two are; -1 when the plane
+#: does not cut the triangle (all corners on one side).
+_ODD_CORNER = np.array([-1, 0, 1, 2, 2, 1, 0, -1], dtype=np.int64)
+
+
 def slice_mesh(triangles: ArrayLike, heights: ArrayLike) -> Slices:
     """Intersect triangles with the horizontal planes ``y = heights[i]``.
 
@@ -83,24 +89,25 @@ def slice_mesh(triangles: ArrayLike, heights: ArrayLike) -> Slices:
     faces = np.repeat(np.arange(len(tri)), count)
     if not len(faces):
         return empty
-    offsets = np.arange(len(faces)) - np.repeat(np.cumsum(count) - count, count)
-    level = np.repeat(first, count) + offsets
+    level = np.repeat(first - np.cumsum(count) + count, count) + np.arange(len(faces))
     d = y[faces] - h[level][:, None]  # signed heights of the corners
     above = d >= 0
-    n_above = above.sum(axis=1)
-    cut = (n_above == 1) | (n_above == 2)
-    faces, level, d, above, n_above = faces[cut], level[cut], d[cut], above[cut], n_above[cut]
-    # the corner alone on its side of the plane; both cut edges start from it
-    odd = np.where(n_above == 1, np.argmax(above, axis=1), np.argmin(above, axis=1))
+    # the corner alone on its side of the plane (both cut edges start from it), from a table:
+    # one pass where counting the corners above and arg-maximising took four
+    odd = _ODD_CORNER[above[:, 0] + 2 * above[:, 1].astype(np.int64) + 4 * above[:, 2]]
+    cut = np.flatnonzero(odd >= 0)
+    faces, level, odd = faces[cut], level[cut], odd[cut]
     u1, u2 = (odd + 1) % 3, (odd + 2) % 3
-    rows = np.arange(len(faces))
-    t = tri[faces]
-    p0 = t[rows, odd][:, [0, 2]]
-    d0 = d[rows, odd]
+    # corners read by flat index from (x, z) of every corner: no (S, 3, 3) copy of the triangles
+    xz = tri[:, :, ::2].reshape(-1, 2)
+    heights_flat = d.reshape(-1)
+    pair, corner = cut * 3, faces * 3
+    p0 = xz[corner + odd]
+    d0 = heights_flat[pair + odd]
 
     def cut_point(u: np.ndarray) -> np.ndarray:
-        du = d[rows, u]
-        return p0 + (t[rows, u][:, [0, 2]] - p0) * (d0 / (d0 - du))[:, None]
+        du = heights_flat[pair + u]
+        return p0 + (xz[corner + u] - p0) * (d0 / (d0 - du))[:, None]
 
     seg = np.stack([cut_point(u1), cut_point(u2)], axis=1)
     # a top corner touching the plane makes a single point, not a segment

@@ -92,6 +92,15 @@ def _check_floor(normals: FloatArray, heights: FloatArray, areas: FloatArray, fl
         )
 
 
+#: BLAS threads for the orientation's products: its matrices are thin, ``(F, 3)`` by ``(3, 3)``
+#: (the faces' normals and centroids turned into a candidate frame), where a second thread
+#: only waits: single-threaded, OpenBLAS computes the same bits in half the median time on this
+#: project's 2-core machine (four such products at 300k faces: 0.021 s instead of 0.043 s, the
+#: slowest of ten 0.045 s instead of 0.19 s), as a busy core (the drawing workers warming up
+#: beside the run, another job) no longer stalls a product while one thread waits for the other.
+_ORIENT_BLAS_THREADS = 1
+
+
 def orient(mesh: Mesh, params: OrientParams | None = None, up_hint: FloatArray | None = None, declared_up: FloatArray | None = None) -> Orientation:
     """Level the mesh, find its floors, ceilings and stories, and turn its walls onto the axes.
 
@@ -114,7 +123,14 @@ def orient(mesh: Mesh, params: OrientParams | None = None, up_hint: FloatArray |
     GeometryError
         No floor, no walls, or an implausible scale.
     """
-    params = params or OrientParams()
+    from threadpoolctl import threadpool_limits
+
+    with threadpool_limits(limits=_ORIENT_BLAS_THREADS, user_api="blas"):
+        return _orient(mesh, params or OrientParams(), up_hint, declared_up)
+
+
+def _orient(mesh: Mesh, params: OrientParams, up_hint: FloatArray | None, declared_up: FloatArray | None) -> Orientation:
+    """:func:`orient` itself, with its parameters given."""
     _check_scale(mesh, params)
     gravity = estimate_gravity(mesh, params, up_hint, declared_up)
     areas = mesh.face_areas

@@ -27,6 +27,7 @@ from .sheet import (
     draw_scale_bar,
     draw_title_block,
     format_feet_inches,
+    grow_max,
     ink_rgba,
     new_figure,
     place_raster,
@@ -604,10 +605,8 @@ def segments_figure(centroids: np.ndarray, walls: FlatWalls, story: int, sheet: 
     colored = ok & kept
     image[pz[colored], px[colored]] = palette[(ranks[colored[kept]] * 5) % len(palette)]
     # centroids are a few pixels apart: thicken each dot to 2x2 pixels
-    from scipy.ndimage import maximum_filter
-
     alpha = image[..., 3]
-    grown = maximum_filter(image, size=(2, 2, 1))
+    grown = grow_max(image, 2)
     image = np.where(alpha[..., None] > 0, image, grown)
     ax.patch.set_alpha(0.0)
     place_raster(fig, ax, image)

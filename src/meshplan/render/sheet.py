@@ -516,6 +516,9 @@ def rasterize_segments(segments: np.ndarray, level: np.ndarray, sheet: Sheet) ->
     its segments meet. Each pixel keeps one bit per slice (64 slices to a word, a word array per
     64 slices), set by an unbuffered OR and counted by a population count: a pass over the
     samples, where sorting the (pixel, slice) pairs to find the distinct ones cost twice as much.
+    Each segment's values are repeated over its samples (``np.repeat``) rather than gathered
+    by a per-sample index: the same numbers, a third fewer passes over the 1.6 million samples
+    of the benchmark apartment.
     """
     rows, cols = sheet.raster_shape
     if not len(segments):
@@ -525,13 +528,12 @@ def rasterize_segments(segments: np.ndarray, level: np.ndarray, sheet: Sheet) ->
     a = (segments[:, 0] - origin) / p
     d = (segments[:, 1] - origin) / p - a
     n = np.ceil(np.hypot(d[:, 0], d[:, 1])).astype(np.int64) + 1
-    seg = np.repeat(np.arange(len(a)), n)
-    t = (np.arange(len(seg)) - (np.cumsum(n) - n)[seg]) / np.maximum(n - 1, 1)[seg]
-    c = (a[seg, 0] + d[seg, 0] * t).astype(np.int64)
-    r = (a[seg, 1] + d[seg, 1] * t).astype(np.int64)
+    t = (np.arange(int(n.sum())) - np.repeat(np.cumsum(n) - n, n)) / np.repeat(np.maximum(n - 1, 1), n)
+    c = (np.repeat(a[:, 0], n) + np.repeat(d[:, 0], n) * t).astype(np.int64)
+    r = (np.repeat(a[:, 1], n) + np.repeat(d[:, 1], n) * t).astype(np.int64)
     inside = (c >= 0) & (c < cols) & (r >= 0) & (r < rows)
     pix = (r * cols + c)[inside]
-    lv = np.asarray(level, dtype=np.int64)[seg[inside]]
+    lv = np.repeat(np.asarray(level, dtype=np.int64), n)[inside]
     counts = np.zeros(rows * cols, dtype=np.int32)
     n_levels = int(lv.max()) + 1 if len(lv) else 0
     for w in range(0, n_levels, _LEVELS_PER_WORD):
@@ -542,22 +544,41 @@ def rasterize_segments(segments: np.ndarray, level: np.ndarray, sheet: Sheet) ->
     return counts.reshape(rows, cols)
 
 
+def grow_max(image: np.ndarray, size: int = 2) -> np.ndarray:
+    """``image`` with each pixel the largest value of the ``size`` x ``size`` block ending at it
+    (over its first two axes; further axes, such as colour channels, each on their own): what
+    ``scipy.ndimage.maximum_filter`` gives, edges repeated, value for value.
+
+    A block of 2, the width of the plans' lines and dots, is two shifted maxima: a twentieth
+    of the filter's time on an RGBA sheet (0.004 s instead of 0.08 s); other sizes are left to
+    the filter.
+    """
+    if size != 2:
+        from scipy.ndimage import maximum_filter
+
+        return maximum_filter(image, size=(size, size) + (1,) * (image.ndim - 2))
+    rows = image.copy()
+    np.maximum(image[1:], image[:-1], out=rows[1:])
+    out = rows.copy()
+    np.maximum(rows[:, 1:], rows[:, :-1], out=out[:, 1:])
+    return out
+
+
 def ink_rgba(counts: np.ndarray, opacity: float, color: str = "#14213d", width_px: int = 2) -> np.ndarray:
     """Translucent ink: a pixel crossed by ``k`` slices has opacity ``1 - (1 - opacity)^k``."""
     from matplotlib.colors import to_rgb
-    from scipy.ndimage import maximum_filter
 
     c = np.minimum(counts, 255).astype(np.uint8)
     if width_px > 1:
-        c = maximum_filter(c, size=width_px)
+        c = grow_max(c, width_px)
     lut = np.empty((256, 4), dtype=np.uint8)
     lut[:, :3] = np.round(np.array(to_rgb(color)) * 255)
     lut[:, 3] = np.round(255 * (1.0 - (1.0 - opacity) ** np.arange(256)))
-    return lut[c]
+    # each pixel's four bytes looked up as one 32-bit word: a single gather instead of four
+    return lut.view(np.uint32)[c].view(np.uint8).reshape(*c.shape, 4)
 
 
 _RC: dict[RcKeyType, Any] = {"svg.fonttype": "none", "svg.hashsalt": "meshplan", "pdf.compression": 1, "path.simplify": True}
-
 
 def figure_bytes(fig, fmt: str) -> bytes:
     """Render a figure to PNG, SVG or PDF bytes, without timestamps (byte-reproducible)."""
