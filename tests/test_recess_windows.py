@@ -40,7 +40,7 @@ def _face(depth_at) -> tuple:
     margin = int(np.ceil(params.opening_margin_m / CELL))
     f = _Frame(np.ones((nrow, ncol), dtype=bool), 0.0, 0.0, CEILING, CELL, margin, np.zeros(0), np.zeros(0), 0, False, False)
     walls = SimpleNamespace(u_min=np.array([0.0]), u_max=np.array([LENGTH]))
-    return f, face, recess, (r, c, d), walls, params
+    return f, face, recess, lambda: (r, c, d), walls, params
 
 
 def _pane(deep_m: float):
@@ -71,6 +71,6 @@ def test_a_panel_set_a_few_centimetres_into_the_wall_is_no_window():
     # a sliding door or a panel in its track: a sharp step, but shallower than any glazed reveal
     args = _face(_pane(0.035))
     assert args[2].sum() > 100
-    assert _step(args[2], args[3]) < RECESS_STEP_M
+    assert _step(args[2], args[3]()) < RECESS_STEP_M
     assert _recesses(*args) == []
 

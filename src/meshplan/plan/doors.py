@@ -38,6 +38,7 @@ boxes use the same slab.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -384,16 +385,22 @@ def _gaps(ev: WallEvidence, w: int, floor: float, ceiling: float) -> list[Candid
     nrow = max(1, int(np.ceil((ceiling - floor) / cell)))
     margin = int(np.ceil(params.opening_margin_m / cell))
 
-    def raster(points: FloatArray, front: float, back: float) -> np.ndarray:
-        """Cells holding a point between ``back`` and ``front`` across the face."""
+    def cells(points: FloatArray) -> tuple[FloatArray, IntArray]:
+        """Depth across the face and flat cell index of the ``points`` over the face's
+        rectangle (projected once, rasterized by depth band with :func:`raster`)."""
         pd = points @ n3 - off
         pu, py = points @ t3, points[:, 1]
-        inside = (pd >= back) & (pd <= front) & (pu >= lo) & (pu < hi) & (py >= floor) & (py < ceiling)
-        c = np.clip(np.floor((pu[inside] - lo) / cell).astype(np.int64), 0, ncol - 1)
-        r = np.clip(np.floor((py[inside] - floor) / cell).astype(np.int64), 0, nrow - 1)
-        g = np.zeros((nrow, ncol), dtype=bool)
-        g[r, c] = True
-        return g
+        ok = (pu >= lo) & (pu < hi) & (py >= floor) & (py < ceiling)
+        c = np.clip(np.floor((pu[ok] - lo) / cell).astype(np.int64), 0, ncol - 1)
+        r = np.clip(np.floor((py[ok] - floor) / cell).astype(np.int64), 0, nrow - 1)
+        return pd[ok], r * ncol + c
+
+    def raster(at: tuple[FloatArray, IntArray], front: float, back: float) -> np.ndarray:
+        """Cells holding a point between ``back`` and ``front`` across the face."""
+        pd, flat = at
+        g = np.zeros(nrow * ncol, dtype=bool)
+        g[flat[(pd >= back) & (pd <= front)]] = True
+        return g.reshape(nrow, ncol)
 
     def closed(g: np.ndarray) -> np.ndarray:
         g = ndimage.binary_closing(g, structure=np.ones((2, 2)), border_value=1)
@@ -407,7 +414,8 @@ def _gaps(ev: WallEvidence, w: int, floor: float, ceiling: float) -> list[Candid
         return g
 
     pts = _samples(tri, cell)
-    grid = closed(raster(pts, near, far))
+    at = cells(pts)
+    grid = closed(raster(at, near, far))
 
     verts = tri.reshape(-1, 3)
     vd = verts @ n3 - off
@@ -421,9 +429,13 @@ def _gaps(ev: WallEvidence, w: int, floor: float, ceiling: float) -> list[Candid
     room = ev.normals[cand][keep] @ n3 > ev.cos
     back = tri[room & (_max3(tri @ n3 - off) < -RECESS_MIN_M)]
     if len(back):
-        face = raster(pts, near, -RECESS_MIN_M)
-        recess = ndimage.binary_closing(raster(_samples(back, cell), -RECESS_MIN_M, far), structure=np.ones((2, 2))) & ~face
-        depth = _cell_depths(_samples(tri[room], cell), n3, t3, off, lo, floor, cell, recess.shape, (far, near))
+        face = raster(at, near, -RECESS_MIN_M)
+        recess = ndimage.binary_closing(raster(cells(_samples(back, cell)), -RECESS_MIN_M, far), structure=np.ones((2, 2))) & ~face
+        # the depths of the room-facing surfaces, sampled only for a face with a recess that
+        # passes the cheap tests (most faces have none)
+        def depth() -> tuple[IntArray, IntArray, FloatArray]:
+            return _cell_depths(_samples(tri[room], cell), n3, t3, off, lo, floor, cell, recess.shape, (far, near))
+
         found += [c for c in _recesses(frame, face, recess, depth, walls, params) if not any(_overlap(c, o, RECESS_APART_M) for o in found)]
     return found
 
@@ -480,7 +492,12 @@ def _spread(f: _Frame, recess: np.ndarray, depth: tuple[IntArray, IntArray, Floa
 
 
 def _recesses(
-    f: _Frame, face: np.ndarray, recess: np.ndarray, depth: tuple[IntArray, IntArray, FloatArray], walls: FlatWalls, params: PlanParams
+    f: _Frame,
+    face: np.ndarray,
+    recess: np.ndarray,
+    depth_of: Callable[[], tuple[IntArray, IntArray, FloatArray]],
+    walls: FlatWalls,
+    params: PlanParams,
 ) -> list[Candidate]:
     """Windows whose glazing (a blind, a lattice) was scanned in a reveal: each region of
     ``recess`` (cells where a surface facing the room stands back behind the face, and the face
@@ -495,8 +512,9 @@ def _recesses(
         The face's raster and frame.
     face, recess
         ``(nrow, ncol)`` cells of the face's plane and of surfaces set back behind it.
-    depth
-        ``(rows, cols, depths)`` of the samples of the room-facing surfaces in the face's slab.
+    depth_of
+        Gives ``(rows, cols, depths)`` of the samples of the room-facing surfaces in the face's
+        slab (called once, for the first recess that passes the tests of size and frame).
     walls, params
         The walls (the face's extent) and the size limits of windows.
 
@@ -531,6 +549,7 @@ def _recesses(
         if min((float(side.mean()) if side.size else 0.0) for side in (below, above, before, after)) < RECESS_FRAME_SHARE:
             continue  # no frame in the wall's plane all round: a recessed piece of wall, a niche, a desk's knee space
         if spread is None:
+            depth = depth_of()
             spread = _spread(f, recess, depth, walls)
         step = _step(labels == k, depth)
         if step < max(RECESS_STEP_M, RECESS_STEP_SPREAD * spread):
