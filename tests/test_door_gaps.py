@@ -51,3 +51,26 @@ def test_a_gap_up_to_a_door_head_is_a_door(head_m):
 @pytest.mark.parametrize("head_m", [DOOR_HEAD_MAX_M + 0.1, 2.6])
 def test_a_gap_up_to_a_lintel_above_any_door_head_is_no_door(head_m):
     assert _find(head_m) == []
+
+
+def _walls_in_line(*faces: tuple[float, float]) -> SimpleNamespace:
+    """Wall faces along x at z = 0 facing +z (``(u_min, u_max)`` each), in one story."""
+    n = len(faces)
+    lo, hi = np.array([f[0] for f in faces]), np.array([f[1] for f in faces])
+    return SimpleNamespace(
+        u_min=lo, u_max=hi, normal=np.tile([0.0, 1.0], (n, 1)), tangent=np.tile([1.0, 0.0], (n, 1)),
+        offset=np.zeros(n), story=np.zeros(n, dtype=int),
+        start=np.c_[lo, np.zeros(n)], end=np.c_[hi, np.zeros(n)],
+    )
+
+
+def test_a_gap_past_the_end_of_a_face_is_a_door_only_up_to_another_piece_of_wall():
+    """The face ends at 1.0 m; a gap from 1.0 to 1.85 m up to a lintel at 2.1 m has a far jamb.
+    With the wall going on from 2.0 m (a piece 15 cm short of the jamb, as scans round a door's
+    frame off) it is a door; with nothing of the wall there (a cupboard's side, a counter's end
+    standing in the line) it is not."""
+    f = _frame(2.1)
+    params = PlanParams()
+    with_wall = _doors(f, _walls_in_line((0.0, 1.0), (2.0, 3.0)), np.ones(f.grid.shape[1]), params)
+    alone = _doors(f, _walls_in_line((0.0, 1.0)), np.ones(f.grid.shape[1]), params)
+    assert [d.kind for d in with_wall] == ["door"] and alone == []

@@ -129,6 +129,13 @@ RECESS_STEP_SPREAD = 3.0
 #: The standard deviation of a normal distribution is this times its median absolute deviation.
 MAD_TO_SIGMA = 1.4826
 
+#: A face in the line of a door's wall (:func:`_in_line`) turns from it by at most this angle
+#: (degrees): the scatter of one wall's pieces on a drifting scan.
+COLLINEAR_DOOR_DEG = 10.0
+#: ... and its plane lies within ``collinear_wall_m`` of the face's own, or of the plane this far
+#: (m) behind it: the other side of the same wall (a partition's thickness).
+MAX_DOOR_WALL_M = 0.3
+
 #: Tallest common door head above the floor (m; heads are 1.9-2.4 m): beside a gap whose lintel
 #: the scan missed, a wall rises above it, while wardrobes and partition screens (2.0-2.2 m) do not;
 #: a gap whose "lintel" was scanned higher is no door (it runs up into the rounded-off corner
@@ -586,6 +593,26 @@ def _refine(f: _Frame, left: float, right: float, low: float, high: float) -> tu
     return (float(lv.max()) if len(lv) else left), (float(rv.min()) if len(rv) else right)
 
 
+def _in_line(walls: FlatWalls, w: int, u: float, collinear_m: float, reach_m: float) -> bool:
+    """Whether another wall face of ``w``'s story lies in its line at ``u`` along it: either side
+    of the wall (facing the same way or the other), within ``collinear_m`` of its plane (or of
+    the plane a wall's thickness behind), reaching ``u`` within ``reach_m`` (``door_corner_m``:
+    scans lose the strip of wall beside a door's frame as they round off a corner)."""
+    n, t = walls.normal[w], walls.tangent[w]
+    same = (walls.story == walls.story[w]) & (np.abs(walls.normal @ n) >= np.cos(np.radians(COLLINEAR_DOOR_DEG)))
+    same[w] = False
+    if not same.any():
+        return False
+    k = np.flatnonzero(same)
+    # each face's plane in w's frame: n . p = offset (a face turned the other way: -offset)
+    sign = np.sign(walls.normal[k] @ n)
+    plane = sign * walls.offset[k]
+    near_plane = np.abs(plane - walls.offset[w]) <= collinear_m + MAX_DOOR_WALL_M
+    ends = np.stack([walls.start[k] @ t, walls.end[k] @ t], axis=1)
+    reach = (ends.min(axis=1) - reach_m <= u) & (u <= ends.max(axis=1) + reach_m)
+    return bool(np.any(near_plane & reach))
+
+
 def _doors(f: _Frame, walls: FlatWalls, floor_cols: np.ndarray, params: PlanParams) -> list[Candidate]:
     """Doors: runs of columns empty from the floor up to a door's height, between jambs.
 
@@ -626,6 +653,13 @@ def _doors(f: _Frame, walls: FlatWalls, floor_cols: np.ndarray, params: PlanPara
         if right < walls.u_min[f.wall] - tol or left > walls.u_max[f.wall] + tol:
             continue  # wholly beyond this face: another face's search finds it
         if not params.door_width_m[0] - 2 * tol <= right - left <= params.door_width_m[1] + 2 * tol:
+            continue
+        # a gap running past the end of this face is a door only between two pieces of wall:
+        # its far jamb on another face in this wall's line, or a corner (not a cupboard's side,
+        # a counter's end or clutter standing in the line)
+        if (left < walls.u_min[f.wall] - tol and not f.left_corner and not _in_line(walls, f.wall, left, params.collinear_wall_m, params.door_corner_m)) or (
+            right > walls.u_max[f.wall] + tol and not f.right_corner and not _in_line(walls, f.wall, right, params.collinear_wall_m, params.door_corner_m)
+        ):
             continue
         run = slice(lj[0] + 1, rj[0])
         closed = np.asarray(filled[run] & (head[run] < f.ceiling - params.opening_margin_m))
