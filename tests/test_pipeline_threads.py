@@ -1,4 +1,4 @@
-"""The computing stages run with one BLAS thread (:data:`meshplan.pipeline.COMPUTE_BLAS_THREADS`):
+"""The computing stages run with one BLAS thread (:data:`meshplan.geometry.BLAS_THREADS`):
 their products are thin and the drawing workers use the other cores, so a second BLAS thread
 only waits (issue 15)."""
 

@@ -13,6 +13,7 @@ Conventions
 
 from __future__ import annotations
 
+from contextlib import AbstractContextManager
 from dataclasses import dataclass, field
 from functools import cached_property
 
@@ -261,25 +262,33 @@ def homogeneous(rotation: ArrayLike | None = None, translation: ArrayLike | None
     return m
 
 
-#: Rows from which :func:`thin_product` limits BLAS to one thread: below, OpenBLAS uses one
-#: anyway, and the limit's own cost (0.3 ms) would be most of the product's.
+#: BLAS threads for meshplan's products. They are thin (``(F, 3)`` points, normals or triangles
+#: by ``(3,)`` or ``(3, 3)``): a second thread has no work worth sharing and only waits for the
+#: first. Single-threaded, OpenBLAS computes the same bits in about half the median time on this
+#: project's 2-core machine, and when the other core is busy (the drawing workers beside the
+#: run, another job) a product no longer stalls for up to 0.25 s while one thread waits for the
+#: other (the openings stage of a 300k-face scan: 0.68 s with two threads, 0.30 s with one).
+BLAS_THREADS = 1
+
+#: Rows from which :func:`thin_product` sets :data:`BLAS_THREADS`: below, OpenBLAS uses one
+#: thread anyway, and the limit's own cost (0.3 ms) would be most of the product's.
 _THIN_PRODUCT_MIN_ROWS = 10_000
 
 
-def thin_product(a: FloatArray, b: FloatArray) -> FloatArray:
-    """``a @ b`` for a tall ``a`` of 3 columns (points, normals) and a small ``b`` (3 x 3), with one
-    BLAS thread.
-
-    A second thread has no work worth sharing in such a product and only waits for the first:
-    single-threaded, OpenBLAS computes the same bits in about half the median time on a 2-core
-    machine, and a quarter of the slowest time when the other core is busy (the drawing workers
-    warming up beside the run): see ``meshplan.orient.orientation._ORIENT_BLAS_THREADS``.
-    """
-    if len(a) < _THIN_PRODUCT_MIN_ROWS:
-        return a @ b
+def few_blas_threads() -> AbstractContextManager[object]:
+    """A context in which BLAS runs :data:`BLAS_THREADS` threads (threadpoolctl), for a stage
+    made of thin products."""
     from threadpoolctl import threadpool_limits
 
-    with threadpool_limits(limits=1, user_api="blas"):
+    return threadpool_limits(limits=BLAS_THREADS, user_api="blas")
+
+
+def thin_product(a: FloatArray, b: FloatArray) -> FloatArray:
+    """``a @ b`` for a tall ``a`` of 3 columns (points, normals) and a small ``b`` (3 x 3), with
+    :data:`BLAS_THREADS` threads (see there)."""
+    if len(a) < _THIN_PRODUCT_MIN_ROWS:
+        return a @ b
+    with few_blas_threads():
         return a @ b
 
 

@@ -11,7 +11,7 @@ import logging
 import numpy as np
 
 from .errors import GeometryError
-from .geometry import Annotations, Mesh
+from .geometry import Annotations, Mesh, few_blas_threads
 from .io import LoadStats
 from .options import RunOptions
 from .orient import assign_faces
@@ -104,21 +104,11 @@ def compute(
     the matching rooms take. Units, up axis and the building itself are
     checked against the geometry (:func:`meshplan.plausibility.orient_plausibly`).
 
-    The stages run with :data:`COMPUTE_BLAS_THREADS` BLAS thread (see there).
+    The stages run with :data:`meshplan.geometry.BLAS_THREADS` BLAS thread: their products are
+    thin, and the drawing workers run beside them on the other cores.
     """
-    from threadpoolctl import threadpool_limits
-
-    with threadpool_limits(limits=COMPUTE_BLAS_THREADS, user_api="blas"):
+    with few_blas_threads():
         return _compute(mesh, stats, annotations, options, timer, units_explicit, room_edits)
-
-
-#: BLAS threads while the stages compute. Their products are thin (``(F, 3)`` points, normals
-#: or triangles by ``(3,)`` or ``(3, 3)``), which a second thread does not speed up, and the
-#: drawing workers run beside the stages on the other cores: with one thread per core
-#: already busy, a multithreaded OpenBLAS product waits for its descheduled second thread (the
-#: openings stage of a 300k-face scan took 0.68 s with two threads on a loaded 2-core machine,
-#: 0.30 s with one).
-COMPUTE_BLAS_THREADS = 1
 
 
 def _compute(

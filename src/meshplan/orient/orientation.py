@@ -8,7 +8,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..errors import GeometryError
-from ..geometry import FloatArray, IntArray, Mesh, homogeneous, rotation_about_y, rotation_between
+from ..geometry import FloatArray, IntArray, Mesh, few_blas_threads, homogeneous, rotation_about_y, rotation_between
 from .align import WallAlignment, WallDirection, align_walls
 from .facing import inward_flips
 from .gravity import GravityEstimate, estimate_gravity, refine_with_slabs
@@ -92,15 +92,6 @@ def _check_floor(normals: FloatArray, heights: FloatArray, areas: FloatArray, fl
         )
 
 
-#: BLAS threads for the orientation's products: its matrices are thin, ``(F, 3)`` by ``(3, 3)``
-#: (the faces' normals and centroids turned into a candidate frame), where a second thread
-#: only waits: single-threaded, OpenBLAS computes the same bits in half the median time on this
-#: project's 2-core machine (four such products at 300k faces: 0.021 s instead of 0.043 s, the
-#: slowest of ten 0.045 s instead of 0.19 s), as a busy core (the drawing workers warming up
-#: beside the run, another job) no longer stalls a product while one thread waits for the other.
-_ORIENT_BLAS_THREADS = 1
-
-
 def orient(mesh: Mesh, params: OrientParams | None = None, up_hint: FloatArray | None = None, declared_up: FloatArray | None = None) -> Orientation:
     """Level the mesh, find its floors, ceilings and stories, and turn its walls onto the axes.
 
@@ -123,9 +114,7 @@ def orient(mesh: Mesh, params: OrientParams | None = None, up_hint: FloatArray |
     GeometryError
         No floor, no walls, or an implausible scale.
     """
-    from threadpoolctl import threadpool_limits
-
-    with threadpool_limits(limits=_ORIENT_BLAS_THREADS, user_api="blas"):
+    with few_blas_threads():  # its products are thin (geometry.BLAS_THREADS)
         return _orient(mesh, params or OrientParams(), up_hint, declared_up)
 
 
