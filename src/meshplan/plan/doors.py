@@ -132,8 +132,10 @@ MAD_TO_SIGMA = 1.4826
 #: A face in the line of a door's wall (:func:`_in_line`) turns from it by at most this angle
 #: (degrees): the scatter of one wall's pieces on a drifting scan.
 COLLINEAR_DOOR_DEG = 10.0
-#: ... and its plane lies within ``collinear_wall_m`` of the face's own, or of the plane this far
-#: (m) behind it: the other side of the same wall (a partition's thickness).
+#: ... and its plane lies within ``collinear_m`` plus this much (m) of the face's own, either
+#: way: behind it the other side of the same wall (a partition's thickness); in front of it a
+#: piece of the same wall that a drifting scan set off its plane (the HoloLens office's wall
+#: beside its door stands 11 cm proud of the piece across the door).
 MAX_DOOR_WALL_M = 0.3
 
 #: Tallest common door head above the floor (m; heads are 1.9-2.4 m): beside a gap whose lintel
@@ -595,8 +597,8 @@ def _refine(f: _Frame, left: float, right: float, low: float, high: float) -> tu
 
 def _in_line(walls: FlatWalls, w: int, u: float, collinear_m: float, reach_m: float) -> bool:
     """Whether another wall face of ``w``'s story lies in its line at ``u`` along it: either side
-    of the wall (facing the same way or the other), within ``collinear_m`` of its plane (or of
-    the plane a wall's thickness behind), reaching ``u`` within ``reach_m`` (``door_corner_m``:
+    of the wall (facing the same way or the other), its plane within ``collinear_m`` plus
+    :data:`MAX_DOOR_WALL_M` of ``w``'s either way, reaching ``u`` within ``reach_m`` (``door_corner_m``:
     scans lose the strip of wall beside a door's frame as they round off a corner)."""
     n, t = walls.normal[w], walls.tangent[w]
     same = (walls.story == walls.story[w]) & (np.abs(walls.normal @ n) >= np.cos(np.radians(COLLINEAR_DOOR_DEG)))
