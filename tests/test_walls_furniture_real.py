@@ -64,7 +64,7 @@ def test_desk_screen_in_an_open_office_is_not_a_wall() -> None:
         ("hl2_su_office_chroje", 0.95, 0.1),  # a wall meeting a 2.08 m soffit stays (below door height, top not lost)
         ("quest_mruk_radiotwin_lab_parametric", 0.98, 0.1),  # its tables and storage are boxes too
         ("roomplan_sekhar_small_room_parametric", 1.0, 0.0),
-        ("hl1_cuny_room_sparse_walls", 0.84, 0.0),  # walls in short pieces under a scanned ceiling stay
+        ("hl1_cuny_room_sparse_walls", 0.95, 0.05),  # walls in short pieces under a scanned ceiling stay, grazed ends too (0.84 before)
     ],
 )
 def test_other_scans_keep_their_walls(stem: str, min_f1: float, max_furniture: float) -> None:

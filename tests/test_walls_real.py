@@ -16,6 +16,7 @@ not a wall.
 from __future__ import annotations
 
 import json
+from typing import Any
 
 import numpy as np
 import pytest
@@ -50,7 +51,7 @@ TRUTH = SHARED / "truth"
 #: 3.2, 0 / 0, 0 / 0, 0 / 0, 0 / 0, 0.63 / 1.5.
 EXPECTED = {
     "hl1_ashro_room_45deg": (0.95, 0.5),  # no ceiling
-    "hl1_cuny_room_sparse_walls": (0.65, 0.5),  # walls seen in pieces, tops lost under the ceiling
+    "hl1_cuny_room_sparse_walls": (0.9, 0.5),  # walls seen in pieces, tops lost under the ceiling, ends grazed
     "hl1_hemkinator_large_hall": (0.85, 0.5),  # drifted walls (drawn at their angle), pillars, pilasters
     "hl1_holosoma_room_sparse_walls": (None, 0.6),
     "hl1_mrtk_example_office": (0.85, 0.5),  # free-standing screens
@@ -65,7 +66,7 @@ EXPECTED = {
 }
 
 
-def _score(stem: str) -> dict:
+def _score(stem: str, story0: bool = True) -> Any:
     path = TRUTH / f"{stem}.truth.json"
     if not path.is_file():
         pytest.skip(f"truth {stem} not available (../shared/truth)")
@@ -85,7 +86,7 @@ def _score(stem: str) -> dict:
         "rooms": [],
         "openings": [],
     }
-    return evaluate_real(plan, truth)["stories"][0]["walls"]
+    return evaluate_real(plan, truth)["stories"][0]["walls"] if story0 else evaluate_real(plan, truth)["stories"]
 
 
 @pytest.mark.realscan
@@ -96,6 +97,30 @@ def test_real_scan_walls(stem: str) -> None:
     if min_recall is not None:
         assert w["recall"] >= min_recall, w
     assert w["furniture_length_m"] <= max_furniture, w
+
+
+#: Issue 9's bounds, story by story: wall length F1 at least 0.90 on every story whose truth
+#: has at least 3 sure walls, furniture at most 0.5 m on every story.
+MIN_F1, MIN_SURE_WALLS, MAX_FURNITURE_M = 0.90, 3, 0.5
+
+#: Where the bound is not met, and why (strict: the test fails when it starts to pass).
+BOUND_MISSED = {
+    "hl2_su_apartment_two_story": "0.96 m of the 1.33 m is a floor-to-ceiling surface across the corridor's mouth that the "
+    "mesh shows and the HoloLens' own plane sidecar calls a wall, but the truth reads as open (issue 9, open)",
+}
+
+
+@pytest.mark.realscan
+@pytest.mark.parametrize(
+    "stem",
+    [pytest.param(s, marks=pytest.mark.xfail(reason=BOUND_MISSED[s], strict=True)) if s in BOUND_MISSED else s for s in sorted(EXPECTED)],
+)
+def test_real_scan_walls_meet_the_issue_bounds_on_every_story(stem: str) -> None:
+    for story in _score(stem, story0=False):
+        w = story["walls"]
+        if w["sure_truth_walls"] >= MIN_SURE_WALLS:
+            assert w["f1"] >= MIN_F1, (story["truth_story"] if "truth_story" in story else story, w)
+        assert w["furniture_length_m"] <= MAX_FURNITURE_M, w
 
 
 # ------------------------------------------------------------------------- built rooms
@@ -186,6 +211,45 @@ def test_walls_at_the_edge_of_the_scan_keep_their_lost_tops_and_hidden_feet() ->
     o, walls = _walls(b.mesh())
     assert o.stories[0].ceiling_found
     assert sorted(np.round(walls.length, 1)) == pytest.approx([4.0, 4.0, 5.0, 5.0], abs=0.15)
+
+
+def _grazed_room(low_piece_in_line: bool) -> Mesh:
+    """A 5 x 4 m room under a 2.8 m ceiling. The wall z = 4 is scanned to the ceiling from x 0
+    to 2.5; past a 0.8 m door a piece from x 3.3 to 5 is seen only from 0.3 to 1.6 m (a headset
+    grazed it at the edge of the scan) in the wall's plane, or, with ``low_piece_in_line``
+    false, 0.6 m in front of it with nothing of that wall scanned (a wardrobe's front at the
+    scan's edge). The wall x = 0 is scanned to the ceiling up to z 3 and only to 1.6 m beyond."""
+    b = _Builder()
+    w, d, h = 5.0, 4.0, 2.8
+    b.quad([0, 0, 0], [0, 0, d], [w, 0, 0])  # floor, +y
+    b.quad([0, h, 0], [w, 0, 0], [0, 0, d])  # ceiling, -y
+    b.quad([0, 0, 0], [w, 0, 0], [0, h, 0])  # z = 0, +z
+    b.quad([w, 0, 0], [0, 0, d], [0, h, 0])  # x = w, -x
+    b.quad([0, 0, 0], [0, h, 0], [0, 0, 3.0])  # x = 0 to z 3, +x
+    b.quad([0, 0.3, 3.0], [0, 1.3, 0], [0, 0, 1.0])  # x = 0 beyond z 3, seen 0.3-1.6 m
+    if low_piece_in_line:
+        b.quad([0, 0, d], [0, h, 0], [2.5, 0, 0])  # z = d, -z, to the ceiling
+        b.quad([3.3, 0.3, d], [0, 1.3, 0], [1.7, 0, 0])  # past the door, seen 0.3-1.6 m
+    else:
+        b.quad([3.3, 0.3, d - 0.6], [0, 1.3, 0], [1.7, 0, 0])  # a front 0.6 m inside, nothing behind
+    return b.mesh()
+
+
+def test_a_wall_grazed_at_the_edge_of_the_scan_continues_its_wall() -> None:
+    """Issue 9 (hl1_cuny's south and west walls): the end of a wall at the edge of the scan is
+    seen only to 1.6 m where the rest reaches the ceiling; it continues the wall (across a door
+    too), it does not stop it."""
+    _, walls = _walls(_grazed_room(low_piece_in_line=True))
+    # the four walls whole: 2.5 m (z = 4 stopped at its door) and 3.0 m (x = 0) before
+    assert sorted(np.round(walls.length, 2)) == pytest.approx([4.0, 4.0, 5.0, 5.0], abs=0.15)
+
+
+def test_a_low_front_at_the_edge_of_the_scan_out_of_any_wall_line_is_no_wall() -> None:
+    """The same low surface 0.6 m in front of an unscanned wall (a wardrobe at the edge of the
+    scan) continues no wall: it is not one."""
+    _, walls = _walls(_grazed_room(low_piece_in_line=False))
+    # three walls (x = 0 continued by its grazed end), none in the front's plane
+    assert sorted(np.round(walls.length, 2)) == pytest.approx([4.0, 4.0, 5.0], abs=0.15)
 
 
 def test_a_room_scanned_to_1_1_m_gets_its_walls_but_not_its_counter() -> None:

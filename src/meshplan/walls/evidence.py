@@ -490,17 +490,20 @@ def neighbour_max(cols: Columns, values: FloatArray) -> FloatArray:
     return res
 
 
-def runs(cols: Columns, wall: np.ndarray, neutral: np.ndarray) -> IntArray:
+def runs(cols: Columns, wall: np.ndarray, neutral: np.ndarray, grazed: np.ndarray | None = None) -> IntArray:
     """Run of wall columns of each column's segment (-1 for columns in none).
 
     A run is a sequence of consecutive wall and *neutral* columns (too little seen to tell, such
     as the lintel over a door: they neither start nor break a wall), trimmed to its first and
     last wall column; any other column ends it. Columns with no faces (holes in the scan) do not
-    end a run.
+    end a run. *Grazed* columns (the end of a wall at the edge of the scan, seen lower and lower
+    as the sensor's rays grazed it) extend a run that holds a wall column but start none: the
+    run is trimmed to its first and last wall or grazed column.
     """
     order = np.lexsort((cols.bin, cols.segment))
     seg, w = cols.segment[order], wall[order]
-    ok = w | neutral[order]
+    g = np.zeros(len(w), dtype=bool) if grazed is None else grazed[order] & ~w
+    ok = w | neutral[order] | g
     new_seg = np.r_[True, seg[1:] != seg[:-1]]
     start = ok & (new_seg | ~np.r_[False, ok[:-1]])
     run = np.where(ok, np.cumsum(start) - 1, -1)
@@ -508,8 +511,11 @@ def runs(cols: Columns, wall: np.ndarray, neutral: np.ndarray) -> IntArray:
     pos = np.arange(len(run))
     first = np.full(max(n, 1), len(run))
     last = np.full(max(n, 1), -1)
-    np.minimum.at(first, run[w], pos[w])
-    np.maximum.at(last, run[w], pos[w])
+    has_wall = np.zeros(max(n, 1), dtype=bool)
+    has_wall[run[w]] = True
+    ends = (w | g) & (run >= 0) & has_wall[np.maximum(run, 0)]
+    np.minimum.at(first, run[ends], pos[ends])
+    np.maximum.at(last, run[ends], pos[ends])
     inside = (run >= 0) & (pos >= first[np.maximum(run, 0)]) & (pos <= last[np.maximum(run, 0)])
     run = np.where(inside, run, -1)
     # renumber the runs that kept a wall column, densely

@@ -718,9 +718,10 @@ def find_flat_walls(mesh: Mesh, orientation: Orientation, params: WallParams | N
             offset = group_weighted_median(lab, across_c, areas[fidx], k, across_order)
             u_lo, u_hi = _group_minmax(np.repeat(lab, 3), vu.reshape(-1), k)
             cols = columns(lab, pts[ok, 0], vu, verts[..., 1], across_c, areas[fidx], width, across_order)
-            wall, neutral, edge = _wall_columns(cols, raster, d, story.floor, ceiling, width, params)
+            wall, neutral, edge, grazed = _wall_columns(cols, raster, d, story.floor, ceiling, width, params)
             wall |= _continues(below, d_index, d, offset, u_lo, u_hi, params)[cols.segment]
-            run = runs(cols, wall, neutral)
+            wall |= _in_line_of_walls(cols, wall, grazed, offset, u_lo, u_hi, params)
+            run = runs(cols, wall, neutral, grazed)
             n_runs = int(run.max()) + 1
             # the runs long enough and coming near the floor
             run_face = run[cols.face_column]
@@ -819,10 +820,11 @@ def find_flat_walls(mesh: Mesh, orientation: Orientation, params: WallParams | N
 
 def _wall_columns(
     cols: Columns, raster: StoryRaster, normal: FloatArray, floor: float, ceiling: float | None, width: float, params: WallParams
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Which columns show the evidence of a wall, which are neutral (see
-    :mod:`meshplan.walls.evidence`), and which stand at the edge of the scan (nothing scanned
-    behind them within ``context_m``).
+    :mod:`meshplan.walls.evidence`), which stand at the edge of the scan (nothing scanned
+    behind them within ``context_m``), and which are grazed (a wall's end at the edge of the
+    scan, seen lower than its top: they continue a wall but start none).
 
     The top a column must reach is the highest thing scanned in front of it or behind it (the
     ceiling near it, capped at the story's ceiling, or the top of the scan where there is no
@@ -848,4 +850,34 @@ def _wall_columns(
     flush = hidden_behind(cols, params.context_m, params.box_depth_m, params.max_work_surface_m)
     above_work |= edge & ~furniture_top & ~flush & (top > floor + EDGE_WALL_MIN_SEEN_M)
     plausible = reaches & above_work & ~furniture_top & ~hidden
-    return plausible & seen, plausible & ~seen, edge
+    # a wall grazed at the edge of the scan: the sensor's rays met it ever more obliquely, so its
+    # end is seen lower and lower (1.5-2 m where the rest reaches the ceiling). Such a column,
+    # risen above the work surfaces with no top attached and nothing behind it, and seen over
+    # half its own height, is no evidence of a wall alone (a wardrobe at the scan's edge looks
+    # the same) but continues one (see :func:`meshplan.walls.evidence.runs` and
+    # :func:`_in_line_of_walls`)
+    grazed = edge & ~reaches & ~furniture_top & ~hidden & (cols.top > floor + params.max_work_surface_m)
+    grazed &= cols.top - cols.bottom >= MIN_COLUMN_SPAN_SHARE * (cols.top - floor)
+    return plausible & seen, plausible & ~seen, edge, grazed
+
+
+def _in_line_of_walls(
+    cols: Columns, wall: np.ndarray, grazed: np.ndarray, offset: FloatArray, u_lo: FloatArray, u_hi: FloatArray, params: WallParams
+) -> np.ndarray:
+    """Columns of the segments without a wall column whose grazed columns continue, across a
+    gap no wider than ``merge_gap_m`` (a door), the plane of a segment that holds wall columns
+    (its offset within ``box_depth_m``): the far side of a door at the edge of the scan, seen
+    only to 1.5-2 m. Nothing else stands in a wall's own plane beyond its door; a counter or a
+    wardrobe stands in front of its wall."""
+    k = len(offset)
+    has_wall = np.bincount(cols.segment[wall], minlength=k) > 0
+    has_grazed = np.bincount(cols.segment[grazed], minlength=k) > 0
+    cand = np.flatnonzero(has_grazed & ~has_wall)
+    walls = np.flatnonzero(has_wall)
+    if not len(cand) or not len(walls):
+        return np.zeros(len(cols), dtype=bool)
+    near = np.abs(offset[cand][:, None] - offset[walls][None, :]) <= params.box_depth_m
+    gap = np.maximum(u_lo[walls][None, :] - u_hi[cand][:, None], u_lo[cand][:, None] - u_hi[walls][None, :])
+    ok = np.zeros(k, dtype=bool)
+    ok[cand[(near & (gap <= params.merge_gap_m)).any(axis=1)]] = True
+    return grazed & ok[cols.segment]
