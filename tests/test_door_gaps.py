@@ -74,3 +74,79 @@ def test_a_gap_past_the_end_of_a_face_is_a_door_only_up_to_another_piece_of_wall
     with_wall = _doors(f, _walls_in_line((0.0, 1.0), (2.0, 3.0)), np.ones(f.grid.shape[1]), params)
     alone = _doors(f, _walls_in_line((0.0, 1.0)), np.ones(f.grid.shape[1]), params)
     assert [d.kind for d in with_wall] == ["door"] and alone == []
+
+
+# ------------------------------------------------------------------------- built rooms
+
+
+def _built_openings(leaf_back_m: float | None):
+    """A 24 x 5 m room under a 2.8 m ceiling whose far wall drifts 7 degrees off the axes (a
+    headset's drift, drawn at its own angle) with a 0.9 m door half-way, 11.5-12.4 m
+    along it; and, in the wall z = 0, a 0.9 m doorway at x 3-3.9 up to a lintel at 2.1 m, closed
+    by a leaf set ``leaf_back_m`` behind the wall's face (``None``: no leaf, the room beyond
+    unscanned)."""
+    from meshplan.orient import orient
+    from meshplan.orient.params import OrientParams
+    from meshplan.plan import find_openings
+    from meshplan.walls import find_flat_walls
+    from test_walls_real import _Builder
+
+    b = _Builder()
+    w, d, h, head = 24.0, 5.0, 2.8, 2.1
+    a = np.radians(7.0)
+    t = np.array([np.cos(a), 0.0, np.sin(a)])
+    far = d + w * np.tan(a)
+    b.quad([0, 0, 0], [0, 0, far], [w, 0, 0])  # floor (under the drifted wall too)
+    b.quad([0, h, 0], [w, 0, 0], [0, 0, far])  # ceiling
+    b.quad([0, 0, 0], [0, h, 0], [0, 0, d])  # x = 0, +x
+    b.quad([w, 0, 0], [0, 0, far], [0, h, 0])  # x = w, -x
+    # z = 0, +z: a doorway at x 3-3.9
+    b.quad([0, 0, 0], [3.0, 0, 0], [0, h, 0])
+    b.quad([3.9, 0, 0], [w - 3.9, 0, 0], [0, h, 0])
+    b.quad([3.0, head, 0], [0.9, 0, 0], [0, h - head, 0])
+    if leaf_back_m is not None:
+        b.quad([3.0, 0, -leaf_back_m], [0.9, 0, 0], [0, head, 0])  # the leaf, facing the room
+        b.quad([3.0, 0, 0], [0, 0, -leaf_back_m], [0, head, 0])  # the frame's reveals
+        b.quad([3.9, 0, 0], [0, head, 0], [0, 0, -leaf_back_m])
+    # the drifted wall from (0, d) along t, facing into the room, a door 9.5-10.4 m along
+    L = w / np.cos(a)
+    o = np.array([0.0, 0.0, d])
+    b.quad(o, [0, h, 0], t * 11.5)
+    b.quad(o + t * 12.4, [0, h, 0], t * (L - 12.4))
+    b.quad(o + t * 11.5 + [0, head, 0], [0, h - head, 0], t * 0.9)
+    mesh = b.mesh()
+    ori = orient(mesh, OrientParams(), up_hint=np.array([0.0, 1.0, 0.0]))
+    plan_mesh = mesh.transformed(ori.transform).with_flipped(ori.flipped)
+    walls = find_flat_walls(plan_mesh, ori)
+    return walls, find_openings(plan_mesh, ori, walls), ori
+
+
+def test_a_door_in_a_wall_drawn_at_its_own_angle_far_from_the_origin_is_found() -> None:
+    """A face drawn at its own angle runs across its direction's normal by ``u sin(angle)``:
+    the slab searched for its openings must follow the face, not its direction (hemkinator's
+    NE door, 7-8 degrees off the axes, was never looked at)."""
+    walls, op, ori = _built_openings(None)
+    doors = [i for i, k in enumerate(op.kind) if k == "door"]
+    widths = sorted(round(float(op.u_max[i] - op.u_min[i]), 2) for i in doors)
+    assert len(doors) == 2, widths
+    assert widths == pytest.approx([0.9, 0.9], abs=0.06)
+    drifted = [i for i in doors if abs(abs(walls.normal[op.wall[i]] @ walls.directions[walls.direction[op.wall[i]]]) - 1) > 1e-4]
+    assert len(drifted) == 1
+
+
+@pytest.mark.parametrize("back_m", [0.06, 0.15])
+def test_a_door_whose_leaf_stands_closed_in_its_frame_is_found(back_m: float) -> None:
+    """A doorway closed by its leaf set 6-15 cm back from the wall's face (hemkinator's NE
+    door): a gap in the face's own plane from the floor to a lintel there, between jambs."""
+    walls, op, _ = _built_openings(back_m)
+    doors = [i for i, k in enumerate(op.kind) if k == "door"]
+    assert len(doors) == 2
+    heads = sorted(round(float(op.top[i]), 2) for i in doors)
+    assert heads == pytest.approx([2.1, 2.1], abs=0.06)
+
+
+def test_a_leaf_flush_with_the_wall_is_no_door() -> None:
+    """A panel 2 cm behind the face (the warp of a scanned wall, a board fixed to it) is the
+    wall: only the drifted wall's door is found."""
+    walls, op, _ = _built_openings(0.02)
+    assert [k for k in op.kind].count("door") == 1

@@ -39,7 +39,7 @@ boxes use the same slab.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy import ndimage
@@ -103,6 +103,14 @@ RECESS_FILL = 0.5
 #: the wall no jambs).
 RECESS_FRAME_SHARE = 0.75
 
+#: A door's leaf, closed, stands back from the inner face of its wall: it shuts against the stop
+#: of its frame, behind the casing and the reveal (4-15 cm; hl1_hemkinator's 15 cm), while the
+#: warp of a scanned wall over a door's width stays under 2 cm. A gap in the face's own plane
+#: (this far behind it at most), from the floor to a lintel in that plane, between jambs, is
+#: looked at as a door even where the slab behind it holds a surface (the leaf, or the room
+#: beyond seen through the doorway).
+LEAF_SET_BACK_M = 0.04
+
 #: A recess within this distance (m) of a door or window found in the same face is part of it
 #: (the leaf or the room beyond seen through a doorway, the reveal around a window's hole), not
 #: a window of its own.
@@ -162,7 +170,7 @@ class Candidate:
     u_max: float
     bottom: float
     top: float
-    how: str  # "gap", "no lintel" (the scan missed the lintel), "corner", "panel" or "recess" (glazing set back)
+    how: str  # "gap", "no lintel" (the scan missed the lintel), "corner", "panel", "recess" (glazing set back) or "leaf" (a closed leaf set back)
 
 
 class WallEvidence:
@@ -206,19 +214,25 @@ class WallEvidence:
         d = self.walls.directions[int(self.walls.direction[w])]
         return np.array([d[0], 0.0, d[1]])
 
-    def slab_faces(self, faces: IntArray, key: tuple, w: int, d_range: tuple[float, float]) -> IntArray:
-        """The ``faces`` (cached by ``key``) that may reach into ``d_range`` across face ``w``."""
+    def slab_faces(self, faces: IntArray, key: tuple, w: int, d_range: tuple[float, float], u_range: tuple[float, float]) -> IntArray:
+        """The ``faces`` (cached by ``key``) that may reach into the box ``d_range`` across and
+        ``u_range`` along face ``w``.
+
+        The faces are placed along the normal of the face's *direction* (shared by every face
+        of it), while the box is in the face's own frame: a face drawn at its own angle (a
+        drifted wall, 1-10 degrees off its direction) runs across its direction's normal by
+        ``u * sin(angle)``, so the box's extent along it is taken from its four corners."""
         pos, small, big = self._sorted(key, w, faces)
-        n_dir = self._direction_normal(w)
-        n3 = np.array([self.walls.normal[w][0], 0.0, self.walls.normal[w][1]])
-        sign = 1.0 if float(n_dir @ n3) > 0 else -1.0
+        n_dir = self._direction_normal(w)[[0, 2]]
+        n, t = self.walls.normal[w], self.walls.tangent[w]
         off = float(self.walls.offset[w])
-        a, b = sorted((sign * (d_range[0] + off), sign * (d_range[1] + off)))
-        lo, hi = a - BIG_FACE_M, b + BIG_FACE_M
+        corners = [float(n_dir @ (n * (off + d) + t * u)) for d in d_range for u in u_range]
+        lo, hi = min(corners) - BIG_FACE_M, max(corners) + BIG_FACE_M
         return np.concatenate([small[(pos >= lo) & (pos < hi)], big])
 
-    def facing(self, w: int, d_range: tuple[float, float]) -> IntArray:
-        """The vertical faces facing along face ``w``'s normal that may reach ``d_range``."""
+    def facing(self, w: int, d_range: tuple[float, float], u_range: tuple[float, float]) -> IntArray:
+        """The vertical faces facing along face ``w``'s normal that may reach the box ``d_range``
+        across and ``u_range`` along it."""
         key = ("facing", int(self.walls.direction[w]))
         if key not in self._cache:
             n3 = self._direction_normal(w)
@@ -226,15 +240,16 @@ class WallEvidence:
             if self._vertical_normals is None:
                 self._vertical_normals = self.normals[v]
             self._sorted(key, w, v[np.abs(self._vertical_normals @ n3) >= self.cos])
-        return self.slab_faces(np.zeros(0, np.int64), key, w, d_range)
+        return self.slab_faces(np.zeros(0, np.int64), key, w, d_range, u_range)
 
-    def floor_faces(self, w: int, floor: float, d_range: tuple[float, float]) -> IntArray:
-        """The floor faces at height ``floor`` that may reach ``d_range`` across face ``w``."""
+    def floor_faces(self, w: int, floor: float, d_range: tuple[float, float], u_range: tuple[float, float]) -> IntArray:
+        """The floor faces at height ``floor`` that may reach the box ``d_range`` across and
+        ``u_range`` along face ``w``."""
         key = ("floor", int(self.walls.direction[w]), round(floor, 6))
         if key not in self._cache:
             f = self.floorish
             self._sorted(key, w, f[np.abs(self.centroids[f, 1] - floor) <= FLOOR_BAND_M])
-        return self.slab_faces(np.zeros(0, np.int64), key, w, d_range)
+        return self.slab_faces(np.zeros(0, np.int64), key, w, d_range, u_range)
 
     def near(
         self, faces: IntArray, n3: FloatArray, t3: FloatArray, off: float,
@@ -377,7 +392,7 @@ def _gaps(ev: WallEvidence, w: int, floor: float, ceiling: float) -> list[Candid
         hi = right_corner + EDGE_CELLS * cell
 
     # triangles of the slab that face along the wall's normal
-    cand = ev.near(ev.facing(w, (far, near)), n3, t3, off, (far, near), (lo, hi), (floor, ceiling))
+    cand = ev.near(ev.facing(w, (far, near), (lo, hi)), n3, t3, off, (far, near), (lo, hi), (floor, ceiling))
     tv = ev.tri[cand]
     d = tv @ n3 - off
     u = tv @ t3
@@ -433,6 +448,18 @@ def _gaps(ev: WallEvidence, w: int, floor: float, ceiling: float) -> list[Candid
     floor_cols = _floor_beyond(ev, w, n3, t3, off, floor, lo, ncol, cell, params)
     frame = _Frame(grid, lo, floor, ceiling, cell, margin, vu, vy, w, left_corner is not None, right_corner is not None)
     found = _doors(frame, walls, floor_cols, params) + _windows(frame, walls, params)
+    # doors whose leaf stands closed in its frame: the same reading on the face's own plane only,
+    # where the whole slab shows something behind the face (the leaf or the room beyond); only
+    # gaps under a lintel scanned in that plane (the frame on three sides) count
+    face_grid = closed(raster(at, near, -LEAF_SET_BACK_M))
+    if not np.array_equal(face_grid, grid):
+        in_face = vd[(vd >= far) & (vd <= near)] >= -LEAF_SET_BACK_M
+        leaf = replace(frame, grid=face_grid, vu=vu[in_face], vy=vy[in_face])
+        found += [
+            replace(c, how="leaf")
+            for c in _doors(leaf, walls, floor_cols, params)
+            if c.how in ("gap", "corner") and not any(_overlap(c, o) for o in found)
+        ]
     # windows whose glazing was scanned, set back in a reveal: holes in the face's own plane
     # over a surface behind it that faces the room (the wall's far face faces away)
     room = ev.normals[cand][keep] @ n3 > ev.cos
@@ -752,7 +779,8 @@ def _floor_beyond(
 ) -> np.ndarray:
     """``(ncol,)`` whether floor was scanned behind the face (through the wall) in each column."""
     behind = (-FLOOR_BEYOND_M, -params.opening_slab_m)
-    f = ev.near(ev.floor_faces(w, floor, behind), n3, t3, off, behind, (lo, lo + ncol * cell), (floor - FLOOR_BAND_M, floor + FLOOR_BAND_M))
+    along = (lo, lo + ncol * cell)
+    f = ev.near(ev.floor_faces(w, floor, behind, along), n3, t3, off, behind, along, (floor - FLOOR_BAND_M, floor + FLOOR_BAND_M))
     out = np.zeros(ncol, dtype=bool)
     if not len(f):
         return out
