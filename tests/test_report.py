@@ -3,6 +3,7 @@ view, the plans, and placing an annotation by clicking the model, exported and r
 
 from __future__ import annotations
 
+import base64
 import html
 import json
 import os
@@ -17,6 +18,7 @@ import meshplan
 from meshplan.export.report import report_html, view_meshes
 from meshplan.export.synth import write_synthetic
 from meshplan.synthetic import SynthParams, generate
+from test_view3d import decode_layer, position_bound
 
 pytestmark = pytest.mark.slow  # whole runs of meshplan: not part of the unit layer (-m "not slow")
 
@@ -41,6 +43,20 @@ def room(tmp_path_factory):
     scan = write_synthetic(generate(SynthParams(preset="room", seed=5, furniture=False)), tmp / "scan")
     result = meshplan.run(scan, annotations=tmp / "scan" / "annotations.json", output=tmp / "out")
     return tmp, scan, result
+
+
+_DATA = re.compile(r'<script type="application/json" id="meshplan-data">(.*?)</script>', re.S)
+
+
+def _page_data(page: str) -> dict:
+    """The page's ``meshplan-data`` JSON."""
+    return json.loads(_DATA.search(page).group(1))
+
+
+def _with_page_data(page: str, data: dict) -> str:
+    """The page with other data (escaped as report.py escapes them)."""
+    text = json.dumps(data, separators=(",", ":")).replace("<", "\\u003c")
+    return _DATA.sub(lambda _: f'<script type="application/json" id="meshplan-data">{text}</script>', page, count=1)
 
 
 def _files(out: Path) -> dict[str, bytes]:
@@ -141,6 +157,30 @@ def test_large_scans_are_subsampled_by_whole_faces(room):
     assert not full.decimated and f"Showing {full.faces_shown:,} of {full.faces_total:,} faces" in report_html(result, _files(tmp / "out"))
 
 
+def test_page_meshes_decode_to_the_faces_shown(room):
+    """The packed layers of the page (view3d._layer_data) decode, as report.js decodes them, to
+    the faces of the view: the same corners (each decoded vertex one vertex of the layer), each
+    within the quantization's stated error, in a fraction of the former size."""
+    tmp, _, result = room
+    data = _page_data((tmp / "out" / "report.html").read_text(encoding="utf-8"))
+    by_name = {m["name"]: m for m in data["meshes"]}
+    for layer in view_meshes(result).layers:
+        m = by_name[layer.name]
+        pos, faces = decode_layer(m)
+        assert m["n_faces"] == layer.mesh.n_faces and m["face_dtype"] == "uint16"  # under 65536 vertices
+        pairs = np.unique(np.stack([faces.ravel(), layer.mesh.faces.ravel()], axis=1), axis=0)
+        assert len(pairs) == m["n_vertices"] == len(np.unique(pairs[:, 1])), "a decoded vertex is not one vertex of the layer"
+        step = np.array(m["position_step"])
+        assert np.all(step <= 12.0 / 65535)  # the room is under 12 m across: under 0.1 mm off
+        assert np.all(np.abs(pos[faces] - layer.mesh.triangles) <= position_bound(layer.mesh.triangles, step))
+    for m in data["meshes"]:  # the energy model's layers too
+        pos, faces = decode_layer(m)
+        assert len(faces) == m["n_faces"] and np.all(np.isfinite(pos))
+    # float32 coordinates and uint32 indices (base64) took 25 bytes a face shown here; 4 now
+    size = sum(len(m["positions"]) + len(m["faces"]) for m in data["meshes"])
+    assert size / data["faces_shown"] < 8.0, size / data["faces_shown"]
+
+
 def test_model_without_ceiling_every_parameter_and_room_areas(room):
     tmp, _, result = room
     page = (tmp / "out" / "report.html").read_text(encoding="utf-8")
@@ -148,7 +188,7 @@ def test_model_without_ceiling_every_parameter_and_room_areas(room):
     for sp in result.stories:
         s = sp.story
 
-        def ceiling_faces(mesh) -> int:
+        def ceiling_faces(mesh, s=s) -> int:
             c, n = mesh.face_centroids, mesh.face_normals
             return int(np.count_nonzero((np.abs(c[:, 1] - s.ceiling) < 0.05) & (n[:, 1] < -0.9)))
 
@@ -185,8 +225,10 @@ def browser():
 class _Page:
     """A page that records every request and every console error."""
 
-    def __init__(self, browser, url: str) -> None:
+    def __init__(self, browser, url: str, *, init_script: str | None = None, expect_error: bool = False) -> None:
         self.context = browser.new_context(viewport={"width": 1400, "height": 1000}, accept_downloads=True)
+        if init_script:
+            self.context.add_init_script(init_script)
         self.page = self.context.new_page()
         self.requests: list[str] = []
         self.errors: list[str] = []
@@ -196,7 +238,8 @@ class _Page:
         self.url = url
         self.page.goto(url)
         self.page.wait_for_function("window.meshplanReport && (meshplanReport.ready || meshplanReport.error)", timeout=60_000)
-        assert self.page.evaluate("meshplanReport.error") is None
+        if not expect_error:
+            assert self.page.evaluate("meshplanReport.error") is None
 
     def settle(self, point) -> dict:
         """Where ``point`` is drawn, once the camera has stopped moving."""
@@ -349,6 +392,13 @@ def test_click_on_subsampled_model_stays_on_the_surface(room, browser):
     pg = _Page(browser, page_path.as_uri())
     try:
         assert pg.page.evaluate("meshplanReport.data.faces_shown") <= 6000
+        # the layers the page decoded are those decoded here from its data, bit for bit
+        js = pg.page.evaluate("meshplanReport.meshes.map(m => [m.name, [m.x, m.y, m.z, m.i, m.j, m.k].map(a => Array.from(a))])")
+        for (name, arrays), m in zip(js, _page_data(page_path.read_text(encoding="utf-8"))["meshes"]):
+            pos, faces = decode_layer(m)
+            assert name == m["name"]
+            np.testing.assert_array_equal(np.array(arrays[:3], dtype=np.float32).reshape(3, -1).T, pos)
+            np.testing.assert_array_equal(np.array(arrays[3:], dtype=np.int64).reshape(3, -1).T, faces)
         pg.page.click("#view-top")
         layer = view_meshes(result, max_faces=6000).layers[0]
         for target in (_floor_target(result, layer.mesh), _floor_target(result, result.mesh) + [0.31, 0.0, -0.27]):
@@ -362,3 +412,31 @@ def test_click_on_subsampled_model_stays_on_the_surface(room, browser):
         assert pg.errors == [] and pg.external_requests() == []
     finally:
         pg.close()
+
+
+@pytest.mark.browser
+def test_model_that_cannot_be_decoded_says_so(room, browser):
+    """The 3D view is set up asynchronously (the browser inflates the meshes): a failure on the
+    way is still reported (meshplanReport.error, the console, a message in place of the plot),
+    and the annotation panel works without it."""
+    tmp, _, result = room
+    page = (tmp / "out" / "report.html").read_text(encoding="utf-8")
+    data = _page_data(page)
+    data["meshes"][0]["faces"] = base64.b64encode(b"not deflate data").decode("ascii")
+    broken = tmp / "broken.html"
+    broken.write_text(_with_page_data(page, data), encoding="utf-8")
+    cases = [
+        (broken.as_uri(), None, "could not be drawn"),
+        ((tmp / "out" / "report.html").as_uri(), "delete window.DecompressionStream;", "DecompressionStream"),
+    ]
+    for url, init_script, message in cases:
+        pg = _Page(browser, url, init_script=init_script, expect_error=True)
+        try:
+            assert not pg.page.evaluate("meshplanReport.ready")
+            assert pg.page.evaluate("meshplanReport.error")
+            assert message in pg.page.locator("#model3d").inner_text()
+            assert any("3D view could not be drawn" in e for e in pg.errors), pg.errors
+            assert pg.page.locator("#ann-table tbody tr").count() == len(result.annotations)
+            assert pg.external_requests() == []
+        finally:
+            pg.close()

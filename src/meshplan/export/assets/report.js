@@ -1,10 +1,13 @@
 /* meshplan report.html: the 3D view (plotly) and the annotation editor.
  *
- * Data come from the JSON in #meshplan-data (see meshplan/export/report.py). Everything is in
- * the plan frame (metres, +y up) except what is exported, which goes back to the scan's own
- * coordinates and units. A click is turned into a ray with the camera plotly draws with, and
- * the ray is cast against the faces shown, so that the point picked lies on the surface under
- * the cursor (plotly's own click data only give the nearest vertex).
+ * Data come from the JSON in #meshplan-data (see meshplan/export/report.py; the meshes are
+ * packed by meshplan/export/view3d.py and decoded by decodeLayer, once the browser has inflated
+ * them, before the plot is made). Everything is in the plan frame (metres, +y up) except what
+ * is exported, which goes back to the scan's own coordinates and units. A click is turned into
+ * a ray with the camera plotly draws with, and the ray is cast against the faces shown, so that
+ * the point picked lies on the surface under the cursor (on the faces as decoded: within a
+ * tenth of a millimetre of the scan's on a 10 m story; plotly's own click data only give the
+ * nearest vertex).
  *
  * plotly's turntable rotation keeps its z axis up, so the plot shows plan (x, y, z) as plotly
  * (x, -z, y): a proper rotation (no mirror), with y up and, seen from above, x to the right and
@@ -21,31 +24,69 @@
   // ---------------------------------------------------------------------------------------
   // Geometry
 
-  function decode(b64) {
+  function bytesOf(b64) {
     var bin = atob(b64);
     var n = bin.length;
     var out = new Uint8Array(n);
     for (var i = 0; i < n; i++) out[i] = bin.charCodeAt(i);
-    return out.buffer;
+    return out;
   }
 
-  var meshes = DATA.meshes.map(function (m) {
+  // A block of the page's data: base64 of zlib (deflate) bytes, inflated by the browser itself
+  // (DecompressionStream: Chrome/Edge 80+, Firefox 113+, Safari 16.4+; nothing is fetched).
+  function inflate(b64) {
+    if (typeof DecompressionStream === "undefined") {
+      return Promise.reject(new Error("this browser cannot inflate the model (no DecompressionStream)"));
+    }
+    var stream = new Blob([bytesOf(b64)]).stream().pipeThrough(new DecompressionStream("deflate"));
+    return new Response(stream).arrayBuffer();
+  }
+
+  // A layer as meshplan.export.view3d._layer_data packs it: uint16 coordinates on the layer's
+  // box (x = origin + q * step, as decode_positions), given per axis as the low and then the
+  // high bytes of their differences from vertex to vertex, modulo 65536 (as unpack_positions);
+  // and faces as back-references to the vertices in first-use order (index = next - code,
+  // where next is the first vertex not yet seen, one on after each 0 code; as decode_faces).
+  function decodeLayer(m) {
     var nv = m.n_vertices, nf = m.n_faces;
-    var pos = new Float32Array(decode(m.positions));
-    var idx = new Uint32Array(decode(m.faces));
-    return {
-      name: m.name, role: m.role, story: m.story, color: m.color, visible: m.visible, slack: m.slack,
-      nv: nv, nf: nf,
-      x: pos.subarray(0, nv), y: pos.subarray(nv, 2 * nv), z: pos.subarray(2 * nv, 3 * nv),
-      i: idx.subarray(0, nf), j: idx.subarray(nf, 2 * nf), k: idx.subarray(2 * nf, 3 * nf)
-    };
-  });
+    return Promise.all([inflate(m.positions), inflate(m.faces)]).then(function (blocks) {
+      var wide = m.face_dtype === "uint32";
+      if (blocks[0].byteLength !== 6 * nv || blocks[1].byteLength !== (wide ? 12 : 6) * nf) {
+        throw new Error("the data of layer " + m.name + " do not match its size");
+      }
+      var b = new Uint8Array(blocks[0]), o = m.position_origin, st = m.position_step;
+      var pos = new Float32Array(3 * nv);
+      for (var a = 0; a < 3; a++) {
+        var lo = 2 * a * nv, hi = lo + nv, q = 0;
+        for (var n = 0; n < nv; n++) {
+          q = (q + (b[lo + n] | (b[hi + n] << 8))) & 0xffff;
+          pos[a * nv + n] = o[a] + q * st[a];
+        }
+      }
+      var codes = wide ? new Uint32Array(blocks[1]) : new Uint16Array(blocks[1]);
+      var idx = new Uint32Array(3 * nf), next = 0;
+      for (var f = 0; f < nf; f++) {
+        for (var c = 0; c < 3; c++) {
+          var code = codes[3 * f + c];
+          idx[c * nf + f] = next - code; // i, j and k blocks, as plotly wants them
+          if (code === 0) next++;
+        }
+      }
+      if (next !== nv) throw new Error("the faces of layer " + m.name + " do not match its vertices");
+      return {
+        name: m.name, role: m.role, story: m.story, color: m.color, visible: m.visible, slack: m.slack,
+        nv: nv, nf: nf,
+        x: pos.subarray(0, nv), y: pos.subarray(nv, 2 * nv), z: pos.subarray(2 * nv, 3 * nv),
+        i: idx.subarray(0, nf), j: idx.subarray(nf, 2 * nf), k: idx.subarray(2 * nf, 3 * nf)
+      };
+    });
+  }
+
+  var meshes = []; // the decoded layers, once decodeLayer has made them (see the end)
 
   // plan frame <-> plotly's axes (see the top of this file)
   function toPlot(p) { return [p[0], -p[2], p[1]]; }
   function fromPlot(q) { return [q[0], q[2], -q[1]]; }
-
-  api.timing.decode_ms = performance.now() - t0;
 
   // 4x4 matrices are column-major arrays (as gl-matrix and plotly's cameraParams).
   function mul(a, b) {
@@ -241,39 +282,46 @@
   // ---------------------------------------------------------------------------------------
   // Plot
 
+  // The traces are made once the layers are decoded (buildTraces): a mesh3d a layer, then the
+  // markers and probes of each kind of annotation, then the point picked.
   var traces = [], meshTrace = [], kindTrace = {}, probeTrace = {}, pendingTrace;
-  meshes.forEach(function (m, li) {
-    meshTrace[li] = traces.length;
-    traces.push({
-      type: "mesh3d", name: m.name, x: m.x, y: m.z.map(function (c) { return -c; }), z: m.y, i: m.i, j: m.j, k: m.k,
-      color: m.color, flatshading: true, showlegend: true, hoverinfo: "none",
-      // plotly's default epsilons zero the normals of small faces (scaled to the scene box,
-      // a scan's faces are tiny), which leaves them flat grey without any shading
-      lighting: { ambient: 0.45, diffuse: 0.8, specular: 0.05, roughness: 0.8, fresnel: 0.1, facenormalsepsilon: 0, vertexnormalsepsilon: 0 },
-      lightposition: { x: 3e4, y: -2e4, z: 1e5 },
-      visible: m.visible ? true : "legendonly"
+  var drawn = false; // Plotly.newPlot was called: the traces can be restyled
+
+  function buildTraces() {
+    meshes.forEach(function (m, li) {
+      meshTrace[li] = traces.length;
+      traces.push({
+        type: "mesh3d", name: m.name, x: m.x, y: m.z.map(function (c) { return -c; }), z: m.y, i: m.i, j: m.j, k: m.k,
+        color: m.color, flatshading: true, showlegend: true, hoverinfo: "none",
+        // plotly's default epsilons zero the normals of small faces (scaled to the scene box,
+        // a scan's faces are tiny), which leaves them flat grey without any shading
+        lighting: { ambient: 0.45, diffuse: 0.8, specular: 0.05, roughness: 0.8, fresnel: 0.1, facenormalsepsilon: 0, vertexnormalsepsilon: 0 },
+        lightposition: { x: 3e4, y: -2e4, z: 1e5 },
+        visible: m.visible ? true : "legendonly"
+      });
     });
-  });
-  DATA.kinds.forEach(function (k) {
-    var col = DATA.kind_colors[k];
-    kindTrace[k] = traces.length;
-    traces.push({
-      type: "scatter3d", mode: "markers+text", name: k, legendgroup: k, x: [], y: [], z: [], text: [],
-      marker: { size: 5, color: col, line: { color: "#ffffff", width: 1 } },
-      textposition: "top center", textfont: { size: 11, color: col },
-      hovertemplate: "%{text} (" + k + ")<extra></extra>"
+    DATA.kinds.forEach(function (k) {
+      var col = DATA.kind_colors[k];
+      kindTrace[k] = traces.length;
+      traces.push({
+        type: "scatter3d", mode: "markers+text", name: k, legendgroup: k, x: [], y: [], z: [], text: [],
+        marker: { size: 5, color: col, line: { color: "#ffffff", width: 1 } },
+        textposition: "top center", textfont: { size: 11, color: col },
+        hovertemplate: "%{text} (" + k + ")<extra></extra>"
+      });
+      probeTrace[k] = traces.length;
+      traces.push({
+        type: "scatter3d", mode: "lines", name: k + " probes", legendgroup: k, showlegend: false,
+        x: [], y: [], z: [], line: { color: col, width: 5 }, hoverinfo: "skip"
+      });
     });
-    probeTrace[k] = traces.length;
+    pendingTrace = traces.length;
     traces.push({
-      type: "scatter3d", mode: "lines", name: k + " probes", legendgroup: k, showlegend: false,
-      x: [], y: [], z: [], line: { color: col, width: 5 }, hoverinfo: "skip"
+      type: "scatter3d", mode: "markers+lines", name: "picked point", showlegend: false, x: [], y: [], z: [],
+      marker: { size: 6, color: "#111111", symbol: "diamond" }, line: { color: "#111111", width: 4 }, hoverinfo: "skip"
     });
-  });
-  pendingTrace = traces.length;
-  traces.push({
-    type: "scatter3d", mode: "markers+lines", name: "picked point", showlegend: false, x: [], y: [], z: [],
-    marker: { size: 6, color: "#111111", symbol: "diamond" }, line: { color: "#111111", width: 4 }, hoverinfo: "skip"
-  });
+    fillInitial();
+  }
 
   function annotationArrays() {
     var upd = { x: [], y: [], z: [], text: [] }, ids = [];
@@ -301,13 +349,13 @@
     return { x: [[q[0], q[0] + L * d[0]]], y: [[q[1], q[1] + L * d[1]]], z: [[q[2], q[2] + L * d[2]]] };
   }
 
-  (function fillInitial() {
+  function fillInitial() {
     var a = annotationArrays();
     a.ids.forEach(function (ti, n) {
       traces[ti].x = a.upd.x[n]; traces[ti].y = a.upd.y[n]; traces[ti].z = a.upd.z[n];
       if (traces[ti].mode !== "lines") traces[ti].text = a.upd.text[n];
     });
-  })();
+  }
 
   // from above, seen from the bottom of the plan (plan +z); and straight from above
   var CAM_3D = { eye: { x: 0.35, y: -1.45, z: 1.5 }, up: { x: 0, y: 0, z: 1 }, center: { x: 0, y: 0, z: -0.1 } };
@@ -316,7 +364,7 @@
     return { title: { text: title }, backgroundcolor: "#f4f5f7", gridcolor: "#d9dde3", zerolinecolor: "#b9c0ca", showspikes: false };
   };
   // plotly's y axis holds -z: label its ticks with plan z
-  var zAxis = (function () {
+  function zAxis() {
     var lo = Infinity, hi = -Infinity;
     meshes.forEach(function (m) { for (var n = 0; n < m.nv; n++) { var c = m.z[n]; if (c < lo) lo = c; if (c > hi) hi = c; } });
     var ax = axis("z (m)");
@@ -325,20 +373,23 @@
     ax.tickvals = []; ax.ticktext = [];
     for (var t = Math.ceil(lo / step) * step; t <= hi; t += step) { ax.tickvals.push(-t); ax.ticktext.push(String(t)); }
     return ax;
-  })();
-  var layout = {
-    margin: { l: 0, r: 0, t: 0, b: 0 },
-    paper_bgcolor: "#f4f5f7",
-    uirevision: "meshplan",
-    legend: { x: 0.01, y: 0.99, bgcolor: "rgba(255,255,255,0.85)", bordercolor: "#d9dde3", borderwidth: 1 },
-    scene: {
-      aspectmode: "data", dragmode: "turntable", camera: CAM_3D,
-      xaxis: axis("x (m)"), yaxis: zAxis, zaxis: axis("y (m), up")
-    }
-  };
+  }
+  function makeLayout() {
+    return {
+      margin: { l: 0, r: 0, t: 0, b: 0 },
+      paper_bgcolor: "#f4f5f7",
+      uirevision: "meshplan",
+      legend: { x: 0.01, y: 0.99, bgcolor: "rgba(255,255,255,0.85)", bordercolor: "#d9dde3", borderwidth: 1 },
+      scene: {
+        aspectmode: "data", dragmode: "turntable", camera: CAM_3D,
+        xaxis: axis("x (m)"), yaxis: zAxis(), zaxis: axis("y (m), up")
+      }
+    };
+  }
   var config = { displaylogo: false, responsive: true, scrollZoom: true };
 
   function redrawAnnotations() {
+    if (!drawn) return Promise.resolve(); // the plot, when made, draws the annotations as they are then
     var a = annotationArrays();
     var p = pendingArrays();
     var ids = a.ids.concat([pendingTrace]);
@@ -467,11 +518,12 @@
   // ---------------------------------------------------------------------------------------
   // View buttons
 
-  function setCamera(cam) { return Plotly.relayout(gd, { "scene.camera": cam }); }
+  function setCamera(cam) { return drawn ? Plotly.relayout(gd, { "scene.camera": cam }) : Promise.resolve(); }
   $("view-3d").addEventListener("click", function () { setCamera(CAM_3D); });
   $("view-top").addEventListener("click", function () { setCamera(CAM_TOP); });
   Array.prototype.forEach.call(document.querySelectorAll(".story-btn"), function (btn) {
     btn.addEventListener("click", function () {
+      if (!drawn) return;
       var which = btn.getAttribute("data-story");
       var vis = [], ids = [];
       meshes.forEach(function (m, li) {
@@ -495,18 +547,43 @@
     setCamera: setCamera
   });
 
+  // ---------------------------------------------------------------------------------------
+  // Start: inflate and decode the layers (asynchronous: DecompressionStream), then plot. The
+  // panel above works meanwhile; api.ready is set once the plot is drawn, and any failure on
+  // the way (no DecompressionStream, corrupt data, no WebGL) is put in api.error, on the
+  // console and in place of the plot.
+  function fail(err) {
+    api.error = String(err);
+    gd.textContent = "The 3D view could not be drawn: " + (err && err.message ? err.message : err);
+    if (window.console) console.error("meshplan report: the 3D view could not be drawn:", err);
+  }
+
+  var started;
   try {
+    started = Promise.all(DATA.meshes.map(decodeLayer));
+  } catch (err) {
+    started = Promise.reject(err);
+  }
+  started.then(function (decoded) {
+    meshes = api.meshes = decoded;
+    api.timing.decode_ms = performance.now() - t0;
+    buildTraces();
+    api.traces = { mesh: meshTrace, kind: kindTrace, probe: probeTrace, pending: pendingTrace };
     var t1 = performance.now();
-    Plotly.newPlot(gd, traces, layout, config).then(function () {
+    var plotted;
+    try {
+      plotted = Plotly.newPlot(gd, traces, makeLayout(), config);
+    } catch (err) {
+      throw new Error("it needs WebGL (" + err + ")");
+    }
+    drawn = true;
+    return plotted.then(function () {
       gd.on("plotly_click", function (ev) {
         var pt = ev && ev.points && ev.points[0];
         if (pt) api.lastPlotlyClick = { curveNumber: pt.curveNumber, pointNumber: pt.pointNumber, position: fromPlot([pt.x, pt.y, pt.z]) };
       });
       api.timing.plot_ms = performance.now() - t1;
       api.ready = true;
-    }, function (err) { api.error = String(err); });
-  } catch (err) {
-    api.error = String(err);
-    gd.textContent = "The 3D view needs WebGL: " + err;
-  }
+    });
+  }).catch(fail);
 })();
