@@ -451,8 +451,16 @@ def _gaps(ev: WallEvidence, w: int, floor: float, ceiling: float) -> list[Candid
     # doors whose leaf stands closed in its frame: the same reading on the face's own plane only,
     # where the whole slab shows something behind the face (the leaf or the room beyond); only
     # gaps under a lintel scanned in that plane (the frame on three sides) count
-    face_grid = closed(raster(at, near, -LEAF_SET_BACK_M))
-    if not np.array_equal(face_grid, grid):
+    face_raw = raster(at, near, -LEAF_SET_BACK_M)
+    # (only where some column of the face's plane is empty from the floor to a door's height
+    # and the whole slab's is not: closing only fills cells, so the raw raster tells)
+    # and along the face itself (past its ends the whole slab holds the other face of a wall
+    # running on, or a corner's, and a leaf is looked for in the face it closes)
+    door_rows = slice(margin, max(margin + 1, int(np.ceil(params.door_height_m / cell)) - EDGE_CELLS))
+    col_u = lo + (np.arange(ncol) + 0.5) * cell
+    on_face = (col_u >= walls.u_min[w]) & (col_u <= walls.u_max[w])
+    if (on_face & ~face_raw[door_rows].any(axis=0) & grid[door_rows].any(axis=0)).any():
+        face_grid = closed(face_raw)
         in_face = vd[(vd >= far) & (vd <= near)] >= -LEAF_SET_BACK_M
         leaf = replace(frame, grid=face_grid, vu=vu[in_face], vy=vy[in_face])
         found += [
