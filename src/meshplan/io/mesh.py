@@ -669,8 +669,11 @@ def clean_mesh(vertices: np.ndarray, faces: np.ndarray) -> tuple[Mesh, dict[str,
     finite_v = np.all(np.isfinite(vertices), axis=1)
     ok = np.all(finite_v[faces], axis=1)
     counts["dropped_nonfinite"] = int((~ok).sum())
-    faces = faces[ok]
-    vertices = np.where(finite_v[:, None], vertices, 0.0)
+    # (the copies only where something is dropped: at 3M faces each costs 0.1-1 s)
+    if counts["dropped_nonfinite"]:
+        faces = faces[ok]
+    if not finite_v.all():
+        vertices = np.where(finite_v[:, None], vertices, 0.0)
     uniq, inverse = _merge_vertices(vertices)
     faces = inverse[faces]
     tri = uniq[faces]
@@ -680,7 +683,8 @@ def clean_mesh(vertices: np.ndarray, faces: np.ndarray) -> tuple[Mesh, dict[str,
     repeated = (faces[:, 0] == faces[:, 1]) | (faces[:, 1] == faces[:, 2]) | (faces[:, 0] == faces[:, 2])
     degenerate = repeated | ~(area > MIN_FACE_AREA_M2)
     counts["dropped_degenerate"] = int(degenerate.sum())
-    faces, tri, cross = faces[~degenerate], tri[~degenerate], cross[~degenerate]
+    if counts["dropped_degenerate"]:
+        faces, tri, cross = faces[~degenerate], tri[~degenerate], cross[~degenerate]
     # duplicates: the same three vertices in any order; keep the first occurrence
     keep = np.zeros(len(faces), dtype=bool)
     if len(faces):
@@ -696,12 +700,15 @@ def clean_mesh(vertices: np.ndarray, faces: np.ndarray) -> tuple[Mesh, dict[str,
             starts = np.flatnonzero(np.r_[True, np.any(k[1:] != k[:-1], axis=1)])
         keep[np.minimum.reduceat(order, starts)] = True
     counts["dropped_duplicate"] = int(len(faces) - keep.sum())
-    faces = faces[keep]
+    if counts["dropped_duplicate"]:
+        faces, tri, cross = faces[keep], tri[keep], cross[keep]
     used = np.zeros(len(uniq), dtype=bool)
     used[faces.reshape(-1)] = True
+    if used.all():  # every vertex in a face (the usual case): no renumbering
+        return Mesh(uniq, faces)._seed(triangles=tri, _cross=cross), counts
     remap = np.cumsum(used) - 1
     # the corners and cross products are those the mesh would compute: keep them
-    return Mesh(uniq[used], remap[faces])._seed(triangles=tri[keep], _cross=cross[keep]), counts
+    return Mesh(uniq[used], remap[faces])._seed(triangles=tri, _cross=cross), counts
 
 
 def load_mesh(
