@@ -31,7 +31,8 @@ REAL_WINDOWS = {
     # two 0.4 x 0.3 m holes (vents or scan holes: the hall's truth has no window) are none; a
     # recess 1.25 m wide from 1.65 to 2.8 m, its surface 10 cm behind the face of the east wall
     # (a reveal by every measure), is found since the slab searched follows a wall drawn at its
-    # own angle (the wall runs 7-8 degrees off the axes): the truth names no window there
+    # own angle (the wall runs 7-8 degrees off the axes): the truth names no window there, but
+    # it was digitized from slices at 0.3, 1.2 and 3.19 m (its PNG), none of which cuts it
     "hl1_hemkinator_large_hall.ply": (0, 1),
     "hl2_su_office_chroje.ply": (1, 0),  # 1.5 m of glass and blinds 5.5 cm behind the face, 1.15-2.1 m
     "iphone_polycam_tamatebox_tatami_room.glb": (1, 0),  # a lattice 0.2 m deep (found 0.55 of its 0.85 m)
@@ -58,7 +59,8 @@ REAL_DOORS = {
     "hl2_su_apartment_two_story.ply": (2, 1),
     # the NE door, its leaf 15 cm back in its frame, found since (0 of 1 before); a 0.95 m
     # recess 8.5 cm deep from the floor to a straight head at 2.1 m in the north wall is a door
-    # too, where the truth notes "a 1 m high recess (radiator niche?)"
+    # too, where the truth notes "a 1 m high recess (radiator niche?)" from its slices at 0.3
+    # and 1.2 m (the faces there stand 8.5 cm back from 0.4 to 2.05 m, the wall's plane above)
     "hl1_hemkinator_large_hall.ply": (1, 1),
     "hl2_su_office_chroje.ply": (1, 0),  # a 0.75 m door between two pieces of wall, no lintel above the scan's top
     "quest_mruk_radiotwin_lab_parametric.obj": (2, 0),  # door quads over an uncut wall
