@@ -51,6 +51,31 @@ def test_mesh_transform_keeps_normals_and_areas():
     assert np.allclose(m.transformed(mirror).face_normals, [[0, 1, 0]])
 
 
+@pytest.mark.parametrize(
+    "matrix",
+    [
+        [[0, -1, 0, 1], [1, 0, 0, 2], [0, 0, 1, 3], [0, 0, 0, 1]],  # a rotation and a shift
+        [[1, 0, 0, 0], [0, -1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]],  # a reflection
+        [[2, 0.3, 0, 0], [0, 3, 0, 0], [0.1, 0, 0.5, 0], [0, 0, 0, 1]],  # not rigid
+    ],
+)
+def test_transformed_and_flipped_meshes_carry_their_corners_and_normals_over(matrix):
+    """The corners and cross products a mesh computed are mapped into the transformed (and
+    flipped) mesh instead of computed again: they equal those computed from its vertices."""
+    rng = np.random.default_rng(3)
+    v = rng.normal(size=(300, 3))
+    f = np.array([t for t in rng.integers(0, 300, size=(1500, 3)) if len(set(t)) == 3])
+    m = Mesh(v, f)
+    _ = m.face_normals  # computed and cached
+    flip = rng.random(len(f)) < 0.4
+    a = m.transformed(np.array(matrix, dtype=float)).with_flipped(flip)
+    assert "triangles" in a.__dict__ and "_cross" in a.__dict__  # carried over
+    b = Mesh(a.vertices, a.faces)  # computed from scratch
+    np.testing.assert_allclose(a.triangles, b.triangles, atol=1e-12)
+    np.testing.assert_allclose(a.face_normals, b.face_normals, atol=1e-12)
+    np.testing.assert_allclose(a.face_areas, b.face_areas, rtol=1e-12, atol=1e-12)
+
+
 def test_annotations_transform():
     ann = Annotations(("S1",), ("sensor",), [[1, 0, 0]], [[0, 0, 1]])
     m = homogeneous(rotation_about_y(np.pi / 2), [0, 5, 0])
