@@ -39,6 +39,7 @@ import numpy as np
 import shapely
 from shapely.geometry import LineString, MultiLineString, Polygon
 
+from .._kernels import max_corner_distance
 from ..geometry import FloatArray, Mesh
 from ..orient import Orientation, Story, slab_faces
 from ..units import FOOT_M
@@ -236,7 +237,7 @@ def sample_triangles(triangles: FloatArray, spacing: float) -> FloatArray:
     tri = np.asarray(triangles, dtype=np.float64)
     if not len(tri):
         return np.zeros((0, 3))
-    edge = np.max(np.linalg.norm(tri - np.roll(tri, 1, axis=1), axis=2), axis=1)
+    edge = max_corner_distance(np.ascontiguousarray(tri), np.ascontiguousarray(tri), 2)  # longest edges
     levels = np.clip(np.ceil(edge / spacing).astype(np.int64), 1, MAX_SUBDIVISIONS)
     out = []
     for k in np.unique(levels):
@@ -288,12 +289,13 @@ def footprint_raster(mesh: Mesh, orientation: Orientation, story: Story, floor: 
     faces = faces[(h > story.floor) & (h < story.ceiling)]
     # the vertices of faces up to two cells across cover them; larger faces are sampled
     k = max(1, int(round(closing_m / floor.cell)))
-    tri = mesh.triangles[faces]
-    big = np.max(np.linalg.norm(tri - np.roll(tri, 1, axis=1), axis=2), axis=1) > BIG_TRIANGLE_CELLS * floor.cell
+    # (longest edges in one compiled pass over the mesh's corners: no (F, 3, 3) gather)
+    longest = max_corner_distance(mesh.triangles, mesh.triangles, 2)[faces]
+    big = longest > BIG_TRIANGLE_CELLS * floor.cell
     # the small faces' corners, each once (a mask, not np.unique: the raster ignores order)
     used = np.zeros(mesh.n_vertices, dtype=bool)
     used[mesh.faces[faces[~big]].ravel()] = True
-    pts = np.concatenate([mesh.vertices[used], sample_triangles(tri[big], floor.cell)])
+    pts = np.concatenate([mesh.vertices[used], sample_triangles(mesh.triangles[faces[big]], floor.cell)])
     grid = _raster(pts[:, [0, 2]], floor.cell, floor).grid | floor.grid
     pad = np.pad(grid, k)
     grid = binary_closing(pad, np.ones((2 * k + 1, 2 * k + 1), dtype=bool))[k:-k, k:-k]
