@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 
 import meshplan
+from meshplan.export.glb import submesh
 from meshplan.export.report import report_html, view_meshes
 from meshplan.export.synth import write_synthetic
 from meshplan.synthetic import SynthParams, generate
@@ -137,24 +138,47 @@ def test_svg_ids_are_prefixed_per_plan(room):
         assert ref in ids
 
 
-def test_large_scans_are_subsampled_by_whole_faces(room):
+def _open_edges_m(mesh) -> float:
+    """Length of the edges of ``mesh`` with one face only, metres (its holes' and rims')."""
+    f = mesh.faces
+    e = np.sort(np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]]), axis=1)
+    _, first, counts = np.unique(e[:, 0] * mesh.n_vertices + e[:, 1], return_index=True, return_counts=True)
+    b = e[first[counts == 1]]
+    return float(np.linalg.norm(mesh.vertices[b[:, 0]] - mesh.vertices[b[:, 1]], axis=1).sum())
+
+
+def test_large_scans_are_simplified_without_holes(room):
+    """Past max_faces the stories are simplified (vertex clustering on a voxel grid): no more
+    faces than that, no hole the scan had not (open edges: the room's scan, made of pieces
+    that meet edge to edge without sharing their vertices, has 231 m of them; simplified, 59 m:
+    the pieces are sewn together), the same surface within a cell, and the page says so."""
+    from scipy.spatial import cKDTree
+
     tmp, _, result = room
     view = view_meshes(result, max_faces=5000)
-    assert view.decimated and view.faces_shown <= 5000
+    assert view.decimated and view.cell_m is not None
+    assert 0.8 * 5000 <= view.faces_shown <= 5000
     page = report_html(result, _files(tmp / "out"), max_faces=5000)
     assert f"Showing {view.faces_shown:,} of {view.faces_total:,} faces" in page
-    # every face shown is a face of the scan, unchanged
-    scan = result.mesh.triangles.reshape(len(result.mesh.triangles), -1)
-    for layer in view.layers:
-        if layer.role != "scan":
-            continue
-        shown = layer.mesh.triangles.reshape(layer.mesh.n_faces, -1)
-        rows = np.concatenate([scan, shown]).view(np.dtype((np.void, scan.dtype.itemsize * 9))).ravel()
-        _, first = np.unique(rows, return_index=True)
-        assert len(first) == len(scan), "a shown face is not a face of the scan"
-    # the full view says it shows everything
+    assert f"simplified on a grid of {100 * view.cell_m:.1f} cm cells" in page
+    tree = cKDTree(result.mesh.vertices)
+    for sp in result.stories:
+        (layer,) = [v for v in view.layers if v.role == "scan" and v.story == sp.story.index]
+        scan = submesh(result.mesh, sp.model_faces)
+        assert layer.faces_total == scan.n_faces and layer.faces_shown < scan.n_faces
+        assert _open_edges_m(layer.mesh) < 0.5 * _open_edges_m(scan)
+        assert abs(layer.mesh.face_areas.sum() / scan.face_areas.sum() - 1.0) < 0.1
+        # every vertex the mean of its cell's vertices: within the cell's diagonal of one of them
+        d, _ = tree.query(layer.mesh.vertices)
+        assert d.max() <= np.sqrt(3.0) * view.cell_m
+    # the flat walls are whole; the full view says it shows everything, exactly
+    for w in (v for v in view.layers if v.role == "walls"):
+        assert w.faces_shown == w.faces_total
     full = view_meshes(result)
-    assert not full.decimated and f"Showing {full.faces_shown:,} of {full.faces_total:,} faces" in report_html(result, _files(tmp / "out"))
+    assert not full.decimated and full.cell_m is None
+    assert f"Showing {full.faces_shown:,} of {full.faces_total:,} faces" in report_html(result, _files(tmp / "out"))
+    for layer, sp in zip([v for v in full.layers if v.role == "scan"], result.stories):
+        np.testing.assert_array_equal(layer.mesh.triangles, submesh(result.mesh, sp.model_faces).triangles)
 
 
 def test_page_meshes_decode_to_the_faces_shown(room):
@@ -385,7 +409,10 @@ def test_model_rotates_and_zooms_with_the_mouse(room, browser):
 
 
 @pytest.mark.browser
-def test_click_on_subsampled_model_stays_on_the_surface(room, browser):
+def test_click_on_simplified_model_stays_on_the_surface(room, browser):
+    """A scan simplified to 6,000 faces (a quarter of the room's): seen from above, its floor
+    shows no hole (the former subsample of whole faces let the background through a good part
+    of it), and a click lands on the surface shown, which on the floor is the scanned floor."""
     tmp, _, result = room
     page_path = tmp / "small.html"
     page_path.write_text(report_html(result, _files(tmp / "out"), max_faces=6000), encoding="utf-8")
@@ -401,6 +428,18 @@ def test_click_on_subsampled_model_stays_on_the_surface(room, browser):
             np.testing.assert_array_equal(np.array(arrays[3:], dtype=np.int64).reshape(3, -1).T, faces)
         pg.page.click("#view-top")
         layer = view_meshes(result, max_faces=6000).layers[0]
+        # the middle of the floor, seen from above: floor everywhere, no background
+        c, n = layer.mesh.face_centroids, layer.mesh.face_normals
+        floor = c[(n[:, 1] > 0.95) & (np.abs(c[:, 1] - result.stories[0].story.floor) < 0.05)]
+        lo, hi = floor.min(axis=0), floor.max(axis=0)
+        a, b = pg.settle(lo + 0.3 * (hi - lo)), pg.settle(lo + 0.7 * (hi - lo))
+        model = _shot(pg.page.locator("#model3d"), tmp / "small-top.png")
+        box = pg.page.locator("#model3d").bounding_box()
+        x0, x1 = sorted(int(round(p["x"] - box["x"])) for p in (a, b))
+        y0, y1 = sorted(int(round(p["y"] - box["y"])) for p in (a, b))
+        middle = model[y0:y1, x0:x1]
+        assert middle.shape[0] > 50 and middle.shape[1] > 50
+        assert 1.0 - _share_unlike(middle, (0xF4, 0xF5, 0xF7)) < 0.002, "the background shows through the floor"
         for target in (_floor_target(result, layer.mesh), _floor_target(result, result.mesh) + [0.31, 0.0, -0.27]):
             xy = pg.settle(target)
             pg.page.mouse.click(xy["x"], xy["y"])
@@ -408,6 +447,7 @@ def test_click_on_subsampled_model_stays_on_the_surface(room, browser):
             picked = np.array(pg.page.evaluate("meshplanReport.pending.position"))
             pg.page.click("#ann-cancel")
             assert np.linalg.norm((picked - target)[[0, 2]]) < 0.02
+            assert _distance_to_surface(layer.mesh, picked) < 1e-3  # on a face shown
             assert _distance_to_surface(result.mesh, picked) < 0.01
         assert pg.errors == [] and pg.external_requests() == []
     finally:

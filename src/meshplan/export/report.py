@@ -7,9 +7,9 @@ bundle, the style sheet and the script are inlined, the plans are inline SVG and
 figures ``data:`` URIs. It shows
 
 * the oriented 3D model of each story without its ceiling, the flat walls and the annotations,
-  each a layer (plotly legend), rotatable and zoomable; large scans are shown as a
-  deterministic subsample of whole faces (:func:`~meshplan.export.view3d.view_meshes`), and
-  the page says so;
+  each a layer (plotly legend), rotatable and zoomable; large scans are shown simplified, by
+  vertex clustering on the finest voxel grid that fits the page's budget of faces (no holes:
+  :func:`~meshplan.export.view3d.view_meshes`), and the page says so;
 * the pen-and-ink and drafting plans of each story, with the rooms (and openings) of plan.json
   when it has them;
 * the altitude histogram and the normals heat map;
@@ -22,7 +22,7 @@ the viewer, as the probe direction. "Export annotations.json" writes them in the
 coordinates and units of the scan, ready for ``meshplan run --annotations``.
 
 Apart from the timing values, the same result always gives the same page (no timestamps, no
-random ids; the face subsample uses a fixed seed).
+random ids; the simplification is deterministic).
 """
 
 from __future__ import annotations
@@ -42,17 +42,17 @@ from .._version import __version__
 from ..geometry import ANNOTATION_KINDS
 from ..result import PAPER_FACES, PAPER_TIMINGS_S, STAGES
 from .planjson import plan_document
-from .view3d import KIND_PREFIX, MAX_FACES, PROBE_M, SUBSAMPLE_SEED, ViewMesh, ViewMeshes, page_data, subsample_faces, view_meshes
+from .view3d import KIND_PREFIX, MAX_FACES, PROBE_M, SUBSAMPLE_SEED, ViewMesh, ViewMeshes, page_data, simplify_faces, subsample_faces, view_meshes
 
 if TYPE_CHECKING:  # pragma: no cover
     import jinja2
 
     from ..result import Result
 
-# ViewMesh, ViewMeshes, subsample_faces and view_meshes live in view3d; named here as before
+# ViewMesh, ViewMeshes, simplify_faces, subsample_faces and view_meshes live in view3d; named here as before
 __all__ = [
     "KIND_PREFIX", "MAX_FACES", "PROBE_M", "SUBSAMPLE_SEED", "ViewMesh", "ViewMeshes", "inline_svg", "report_html", "report_page",
-    "subsample_faces", "view_meshes",
+    "simplify_faces", "subsample_faces", "view_meshes",
 ]
 
 _ID = re.compile(r'\bid="([^"]+)"')
@@ -291,12 +291,21 @@ def report_page(result: Result, *, max_faces: int = MAX_FACES) -> dict[str, Any]
     doc = plan_document(result)
     view = view_meshes(result, max_faces)
     # the energy model's layers are drawn too, but are no faces of the scan (the note counts those)
-    shown = ViewMeshes(view.layers + _energy_layers(result), view.max_faces)
-    if view.decimated:
+    shown = ViewMeshes(view.layers + _energy_layers(result), view.max_faces, view.cell_m)
+    if view.cell_m is not None:
         faces_note = (
-            f"Showing {view.faces_shown:,} of {view.faces_total:,} faces: a fixed subsample of whole faces keeps "
-            f"the page responsive (the stories without their ceilings have {view.faces_total:,} faces; the scan "
-            f"{result.input.faces:,}). Picked points still lie on the scanned surface."
+            f"Showing {view.faces_shown:,} of {view.faces_total:,} faces: the stories without their ceilings "
+            f"({view.faces_total:,} faces; the scan {result.input.faces:,}) are simplified on a grid of "
+            f"{100 * view.cell_m:.1f} cm cells to keep the page responsive (every vertex moved to the mean of its "
+            f"cell: the surface keeps no hole it did not have, corners are cut by up to a cell). Picked points "
+            f"lie on the surface shown: on flat walls and floors away from their edges, on the scanned surface; "
+            f"elsewhere within a cell of it."
+        )
+    elif view.decimated:  # a point cloud's splats
+        faces_note = (
+            f"Showing {view.faces_shown:,} of {view.faces_total:,} splats: a fixed subsample keeps the page "
+            f"responsive (the stories without their ceilings have {view.faces_total:,}; the cloud's points "
+            f"{result.input.points:,}). Picked points lie on a splat shown."
         )
     else:
         faces_note = (

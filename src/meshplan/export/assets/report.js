@@ -6,8 +6,9 @@
  * is exported, which goes back to the scan's own coordinates and units. A click is turned into
  * a ray with the camera plotly draws with, and the ray is cast against the faces shown, so that
  * the point picked lies on the surface under the cursor (on the faces as decoded: within a
- * tenth of a millimetre of the scan's on a 10 m story; plotly's own click data only give the
- * nearest vertex).
+ * tenth of a millimetre of those shown on a 10 m story, which are the scan's own, or for a large
+ * scan its surface simplified on a grid of a few centimetres; plotly's own click data only give
+ * the nearest vertex).
  *
  * plotly's turntable rotation keeps its z axis up, so the plot shows plan (x, y, z) as plotly
  * (x, -z, y): a proper rotation (no mirror), with y up and, seen from above, x to the right and
@@ -74,7 +75,7 @@
       }
       if (next !== nv) throw new Error("the faces of layer " + m.name + " do not match its vertices");
       return {
-        name: m.name, role: m.role, story: m.story, color: m.color, visible: m.visible, slack: m.slack,
+        name: m.name, role: m.role, story: m.story, color: m.color, visible: m.visible,
         nv: nv, nf: nf,
         x: pos.subarray(0, nv), y: pos.subarray(nv, 2 * nv), z: pos.subarray(2 * nv, 3 * nv),
         i: idx.subarray(0, nf), j: idx.subarray(nf, 2 * nf), k: idx.subarray(2 * nf, 3 * nf)
@@ -176,12 +177,13 @@
     return v === undefined || v === true;
   }
 
-  // Moller-Trumbore against every face of a layer. With slack > 0 (a subsampled layer) a ray
-  // may also take the plane of a shown face it misses by up to `slack` (barycentric), so that
-  // a click in a gap of the subsample lands on the surface seen there, not on what is behind.
+  // Moller-Trumbore against every face of a layer: the nearest face the ray goes through. A
+  // large scan is shown simplified (vertex clustering: a closed surface, no gaps between its
+  // faces), so the face hit is the surface drawn under the cursor (a point cloud's splats,
+  // subsampled past the budget, leave gaps: a click there takes what is seen through them).
   function castLayer(m, ray, best) {
     var ox = ray.o[0], oy = ray.o[1], oz = ray.o[2], dx = ray.d[0], dy = ray.d[1], dz = ray.d[2];
-    var X = m.x, Y = m.y, Z = m.z, I = m.i, J = m.j, K = m.k, eps = m.slack;
+    var X = m.x, Y = m.y, Z = m.z, I = m.i, J = m.j, K = m.k;
     for (var f = 0; f < m.nf; f++) {
       var a = I[f], b = J[f], c = K[f];
       var ax = X[a], ay = Y[a], az = Z[a];
@@ -193,29 +195,24 @@
       var idet = 1 / det;
       var sx = ox - ax, sy = oy - ay, sz = oz - az;
       var u = (sx * px + sy * py + sz * pz) * idet;
-      if (u < -eps || u > 1 + eps) continue;
+      if (u < 0 || u > 1) continue;
       var qx = sy * e1z - sz * e1y, qy = sz * e1x - sx * e1z, qz = sx * e1y - sy * e1x;
       var v = (dx * qx + dy * qy + dz * qz) * idet;
-      if (v < -eps || u + v > 1 + eps) continue;
+      if (v < 0 || u + v > 1) continue;
       var t = (e2x * qx + e2y * qy + e2z * qz) * idet;
       if (!(t > 0)) continue;
-      var exact = u >= 0 && v >= 0 && u + v <= 1;
-      var slot = exact ? "exact" : "near";
-      if (!best[slot] || t < best[slot].t) best[slot] = { t: t, layer: m, face: f };
+      if (!best.hit || t < best.hit.t) best.hit = { t: t, layer: m, face: f };
     }
   }
 
   function pick(clientX, clientY) {
     var ray = clickRay(clientX, clientY);
     if (!ray) return null;
-    var best = { exact: null, near: null };
+    var best = { hit: null };
     meshes.forEach(function (m, li) {
       if (isShown(meshTrace[li])) castLayer(m, ray, best);
     });
-    var hit = best.exact;
-    var len = Math.hypot(ray.d[0], ray.d[1], ray.d[2]);
-    // a face under the cursor wins unless a subsample gap hides a nearer surface (2 cm)
-    if (best.near && (!hit || (hit.t - best.near.t) * len > 0.02)) hit = best.near;
+    var hit = best.hit;
     if (!hit) return null;
     var m = hit.layer, f = hit.face;
     var a = m.i[f], b = m.j[f], c = m.k[f];
@@ -228,8 +225,7 @@
       position: [ray.o[0] + hit.t * ray.d[0], ray.o[1] + hit.t * ray.d[1], ray.o[2] + hit.t * ray.d[2]],
       direction: [n[0] * s, n[1] * s, n[2] * s],
       layer: m.name,
-      face: f,
-      exact: hit === best.exact
+      face: f
     };
   }
 
