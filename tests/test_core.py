@@ -7,6 +7,7 @@ import pytest
 from sklearn.cluster import DBSCAN
 
 from meshplan.errors import ParameterError
+from meshplan.orient.params import PAPER_TRIM_SCHEDULE_DEG
 from meshplan.geometry import Annotations, Mesh, is_rigid, rotation_about_y, rotation_between, homogeneous
 from meshplan.slicing import plane_heights, slice_mesh
 from meshplan.sphere import axial_peaks, to_spherical, trimmed_spherical_kmeans
@@ -108,7 +109,7 @@ def test_trimmed_kmeans_recovers_wall_directions_despite_outliers():
     centres = np.array([[np.cos(yaw + k * np.pi / 2), 0, np.sin(yaw + k * np.pi / 2)] for k in range(4)])
     x = _noisy_directions(rng, centres, 20000, 6.0, 40000)  # half the data is clutter
     init = np.array([[np.cos(k * np.pi / 2), 0, np.sin(k * np.pi / 2)] for k in range(4)])
-    res = trimmed_spherical_kmeans(x, None, init)
+    res = trimmed_spherical_kmeans(x, None, init, PAPER_TRIM_SCHEDULE_DEG)
     for c in centres:
         assert min(angle_deg(c, r) for r in res.centers) < 0.3
     # without trimming, the clutter drags the centres away

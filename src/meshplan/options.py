@@ -14,11 +14,11 @@ from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
 from .errors import MeshplanError, ParameterError
-from .io.mesh import UNITS_M
-from .io.points import VOXEL_M
+from .io.params import VOXEL_M
 from .orient.params import OrientParams
 from .plan.params import PlanParams
 from .render.params import RenderParams
+from .units import UNITS_M
 from .validation import (
     Boolean,
     Constraint,
@@ -51,7 +51,7 @@ class InputParams:
         the available memory.
     point_voxel_m
         Voxel size of the grid a point cloud is subsampled on before it is turned into splats
-        (:data:`meshplan.io.points.VOXEL_M`, 3 cm: coarser than laser spacing, finer than phone
+        (:data:`meshplan.io.params.VOXEL_M`, 3 cm: coarser than laser spacing, finer than phone
         spacing and than anything the stages look at).
     """
 

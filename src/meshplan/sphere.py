@@ -19,9 +19,6 @@ if TYPE_CHECKING:  # pragma: no cover
     from scipy.sparse import csr_matrix
     from scipy.spatial import cKDTree
 
-#: The paper's outlier schedule for the wall alignment, in degrees.
-PAPER_TRIM_SCHEDULE_DEG = (50.0, 40.0, 30.0, 20.0, 10.0, 5.0, 3.0)
-
 
 def to_spherical(directions: ArrayLike) -> tuple[FloatArray, FloatArray]:
     """Spherical coordinates of unit vectors with +y as the pole, as in the paper's heat map.
@@ -92,7 +89,7 @@ def trimmed_spherical_kmeans(
     directions: ArrayLike,
     weights: ArrayLike | None,
     initial_centers: ArrayLike,
-    schedule_deg: tuple[float, ...] = PAPER_TRIM_SCHEDULE_DEG,
+    schedule_deg: tuple[float, ...],
     max_iter: int = 100,
     tol_deg: float = 1e-3,
 ) -> KMeansResult:
@@ -112,7 +109,9 @@ def trimmed_spherical_kmeans(
     initial_centers
         ``(k, 3)`` starting centres. Giving them makes the result deterministic.
     schedule_deg
-        Decreasing outlier angles in degrees; empty for plain spherical k-means.
+        Decreasing outlier angles in degrees; empty for plain spherical k-means. The paper's
+        is :data:`meshplan.orient.params.PAPER_TRIM_SCHEDULE_DEG` (the orientation's
+        parameters hold it: this module knows no stage).
     max_iter
         Maximum rounds of assignment and update per stage.
     tol_deg

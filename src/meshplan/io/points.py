@@ -56,6 +56,7 @@ import numpy as np
 from ..errors import InputError
 from ..geometry import FloatArray, Mesh
 from . import readers
+from .params import VOXEL_M
 from .readers import malformed, truncated
 
 if TYPE_CHECKING:
@@ -79,14 +80,6 @@ __all__ = [
     "wkt_units",
 ]
 
-#: Default voxel size of the subsampling grid, in metres (``point_voxel_m``). 3 cm: coarser than
-#: the 2 mm to 1 cm spacing of laser scans (a 2 mm scan keeps one point in about 200) and finer
-#: than the 5 cm spacing of phone scans (kept whole), so that every scan comes out at one density,
-#: at most about 1,100 points per m2; and three times finer than the smallest size any stage looks
-#: at (the 4-inch depth of the flat-wall box, door jambs at 5 cm, the 2-inch level buckets), so
-#: no stage sees the grid. A 10 cm wall keeps its two faces apart (the 16 neighbours of a point
-#: lie within about 7 cm).
-VOXEL_M = 0.03
 
 #: Neighbours of each point in its PCA (the point itself not counted): 16 on a 3 cm grid reach
 #: about 7 cm, enough to average 1 cm of phone noise into a normal within a few degrees, small

@@ -6,7 +6,6 @@ from dataclasses import asdict, dataclass
 from typing import ClassVar
 
 from ..errors import ParameterError
-from ..sphere import PAPER_TRIM_SCHEDULE_DEG
 from ..units import INCH_M
 from ..validation import (
     MAX_LENGTH_M,
@@ -20,6 +19,10 @@ from ..validation import (
     Real,
     validated,
 )
+
+#: The paper's outlier schedule for the wall alignment, in degrees (here rather than in
+#: :mod:`meshplan.sphere`, which uses it: the options read it for ``--help`` without numpy).
+PAPER_TRIM_SCHEDULE_DEG = (50.0, 40.0, 30.0, 20.0, 10.0, 5.0, 3.0)
 
 #: Accepted values of ``up``: ``auto`` or a signed input axis.
 UP_CHOICES = ("auto", "+x", "-x", "+y", "-y", "+z", "-z")
