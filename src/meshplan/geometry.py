@@ -136,7 +136,8 @@ class Mesh:
         out = Mesh(transform_points(m, self.vertices), self.faces[:, ::-1] if flip else self.faces)
         cached = self.__dict__
         if "triangles" in cached and "_cross" in cached and det != 0:
-            tri = cached["triangles"] @ a3.T + m[:3, 3]
+            # as (3F, 3) and (F, 3) rows: one product each (a stack of 3x3 products is slower)
+            tri = (cached["triangles"].reshape(-1, 3) @ a3.T + m[:3, 3]).reshape(-1, 3, 3)
             cross = cached["_cross"] @ (abs(det) * np.linalg.inv(a3))  # rows: (|det| A^-T c)^T
             out._seed(triangles=tri[:, ::-1] if flip else tri, _cross=cross)
         return out
