@@ -618,6 +618,9 @@ def opening_elements(
             level, why = "high", "the parametric model's own box"
         elif odd:
             level, why = "low", f"unusual size for a {kind} ({width:.2f} x {height:.2f} m)"
+        elif i < len(openings.closed) and openings.closed[i]:
+            # a recess of a door's shape: a closed door's leaf set back in its frame, or a niche
+            level, why = "low", "a closed leaf set back in its frame, or a niche of a door's shape: check on site"
         elif len(seen_sides) >= 2:
             level, why = "high", "frame seen on both faces of its wall"
         elif seen_sides:

@@ -63,6 +63,10 @@ class Openings:
     #: (a door, window or opening box of a parametric model, :mod:`meshplan.plan.parametric`).
     #: Empty: every opening detected.
     source: tuple[str, ...] = ()
+    #: Per opening, whether every find of it was a closed leaf set back in its frame
+    #: (:data:`meshplan.plan.doors.LEAF_SET_BACK_M`): a recess of a door's shape, which a
+    #: closed door and a niche of that shape both are. Empty: none was.
+    closed: tuple[bool, ...] = ()
 
     def __len__(self) -> int:
         return int(len(self.wall))
@@ -155,6 +159,7 @@ def find_openings(
         bottom=np.array([r[4] for r in rows]),
         top=np.array([r[5] for r in rows]),
         faces=tuple(r[6] for r in rows),
+        closed=tuple(bool(r[7]) for r in rows),
     )
 
 
@@ -165,7 +170,7 @@ def _along(walls: FlatWalls, src: int, dst: int, u: float) -> float:
 
 
 def _merge(found: list[Candidate], walls: FlatWalls, physical: tuple[PhysicalWall, ...], params: PlanParams) -> list[tuple]:
-    """One row ``(kind, wall, u_min, u_max, bottom, top, cuts)`` per physical opening.
+    """One row ``(kind, wall, u_min, u_max, bottom, top, cuts, closed)`` per physical opening.
 
     Finds of one kind on parallel faces of a story whose planes lie within a wall's depth and
     whose intervals overlap are the same opening (union-find over the pairs).
@@ -243,4 +248,5 @@ def _one_opening(cands: list[Candidate], walls: FlatWalls, partner: dict[int, tu
         a, b = max(a, float(walls.u_min[f])), min(b, float(walls.u_max[f]))
         if b > a:
             cuts.append((int(f), a, b, float(bottom), float(top)))
-    return (kind, int(wall), float(u0), float(u1), float(bottom), float(top), tuple(cuts))
+    closed = all(c.how == "leaf" for c in cands)
+    return (kind, int(wall), float(u0), float(u1), float(bottom), float(top), tuple(cuts), closed)
