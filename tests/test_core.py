@@ -77,6 +77,18 @@ def test_transformed_and_flipped_meshes_carry_their_corners_and_normals_over(mat
     np.testing.assert_allclose(a.face_areas, b.face_areas, rtol=1e-12, atol=1e-12)
 
 
+def test_a_mesh_computes_its_released_arrays_again():
+    """``release_derived`` forgets the cached corners and normals (the pipeline frees the input
+    mesh's once the plan mesh exists); asked for again, they are the same."""
+    rng = np.random.default_rng(4)
+    m = Mesh(rng.normal(size=(50, 3)), np.array([t for t in rng.integers(0, 50, size=(80, 3)) if len(set(t)) == 3]))
+    before = (m.triangles.copy(), m.face_normals.copy(), m.face_centroids.copy(), m.face_areas.copy())
+    m.release_derived()
+    assert not {"triangles", "_cross", "face_normals", "face_centroids", "face_areas"} & set(m.__dict__)
+    for a, b in zip(before, (m.triangles, m.face_normals, m.face_centroids, m.face_areas)):
+        np.testing.assert_array_equal(a, b)
+
+
 def test_annotations_transform():
     ann = Annotations(("S1",), ("sensor",), [[1, 0, 0]], [[0, 0, 1]])
     m = homogeneous(rotation_about_y(np.pi / 2), [0, 5, 0])

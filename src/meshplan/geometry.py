@@ -65,6 +65,13 @@ class Mesh:
             self.__dict__[name] = _frozen(np.asarray(value, dtype=np.float64))
         return self
 
+    def release_derived(self) -> None:
+        """Forget the derived arrays computed so far (corners, cross products, normals, areas,
+        centroids): they are computed again if asked for. For a caller done with a large mesh
+        that it cannot drop (its own caller holds it)."""
+        for name in ("triangles", "_cross", "face_areas", "face_normals", "face_centroids"):
+            self.__dict__.pop(name, None)
+
     @property
     def n_faces(self) -> int:
         return int(len(self.faces))

@@ -134,6 +134,10 @@ def _compute(
         upright = settle_up(mesh, orientation, options)  # the doors decide when furniture cannot
         orientation, plan_mesh = upright.orientation, upright.mesh
         plan_annotations = annotations.transformed(orientation.transform)
+        # every stage from here works on the plan mesh: the input mesh's derived arrays
+        # (corners, cross products, normals, centroids: 0.45 GB at 3M faces) would only add to
+        # the run's peak, which the drawing stage reaches
+        mesh.release_derived()
     with timer.stage("walls"):
         walls = upright.walls if upright.walls is not None else find_flat_walls(plan_mesh, orientation, options.walls)
     with timer.stage("rooms"):
