@@ -69,8 +69,9 @@ class Mesh:
         """Forget the derived arrays computed so far (corners, cross products, normals, areas,
         centroids): they are computed again if asked for. For a caller done with a large mesh
         that it cannot drop (its own caller holds it)."""
-        for name in ("triangles", "_cross", "face_areas", "face_normals", "face_centroids"):
-            self.__dict__.pop(name, None)
+        for name, attr in vars(Mesh).items():
+            if isinstance(attr, cached_property):
+                self.__dict__.pop(name, None)
 
     @property
     def n_faces(self) -> int:

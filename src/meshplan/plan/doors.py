@@ -443,7 +443,8 @@ def _gaps(ev: WallEvidence, w: int, floor: float, ceiling: float) -> list[Candid
 
     verts = tri.reshape(-1, 3)
     vd = verts @ n3 - off
-    verts = verts[(vd >= far) & (vd <= near)]
+    in_slab = (vd >= far) & (vd <= near)
+    verts, vd = verts[in_slab], vd[in_slab]
     vu, vy = verts @ t3, verts[:, 1]
     floor_cols = _floor_beyond(ev, w, n3, t3, off, floor, lo, ncol, cell, params)
     frame = _Frame(grid, lo, floor, ceiling, cell, margin, vu, vy, w, left_corner is not None, right_corner is not None)
@@ -461,7 +462,7 @@ def _gaps(ev: WallEvidence, w: int, floor: float, ceiling: float) -> list[Candid
     on_face = (col_u >= walls.u_min[w]) & (col_u <= walls.u_max[w])
     if (on_face & ~face_raw[door_rows].any(axis=0) & grid[door_rows].any(axis=0)).any():
         face_grid = closed(face_raw)
-        in_face = vd[(vd >= far) & (vd <= near)] >= -LEAF_SET_BACK_M
+        in_face = vd >= -LEAF_SET_BACK_M
         leaf = replace(frame, grid=face_grid, vu=vu[in_face], vy=vy[in_face])
         found += [
             replace(c, how="leaf")
@@ -478,7 +479,10 @@ def _gaps(ev: WallEvidence, w: int, floor: float, ceiling: float) -> list[Candid
         # the depths of the room-facing surfaces, sampled only for a face with a recess that
         # passes the cheap tests (most faces have none)
         def depth() -> tuple[IntArray, IntArray, FloatArray]:
-            return _cell_depths(_samples(tri[room], cell), n3, t3, off, lo, floor, cell, recess.shape, (far, near))
+            pd, flat = cells(_samples(tri[room], cell))
+            ok = (pd >= far) & (pd <= near)
+            r, c = np.divmod(flat[ok], ncol)
+            return r, c, pd[ok]
 
         found += [c for c in _recesses(frame, face, recess, depth, walls, params) if not any(_overlap(c, o, RECESS_APART_M) for o in found)]
     return found
@@ -487,19 +491,6 @@ def _gaps(ev: WallEvidence, w: int, floor: float, ceiling: float) -> list[Candid
 def _overlap(a: Candidate, b: Candidate, margin: float = 0.0) -> bool:
     """Whether two openings of one face overlap, or come within ``margin`` (m) of each other."""
     return a.u_min < b.u_max + margin and b.u_min < a.u_max + margin and a.bottom < b.top + margin and b.bottom < a.top + margin
-
-
-def _cell_depths(
-    points: FloatArray, n3: FloatArray, t3: FloatArray, off: float, lo: float, floor: float, cell: float, shape: tuple[int, int], d_range: tuple[float, float]
-) -> tuple[IntArray, IntArray, FloatArray]:
-    """The cell (row, column) of a face's raster each of ``points`` within ``d_range`` across the
-    face falls in, and its depth (m, positive into the room)."""
-    nrow, ncol = shape
-    pd = points @ n3 - off
-    c = np.floor((points @ t3 - lo) / cell)
-    r = np.floor((points[:, 1] - floor) / cell)
-    ok = (pd >= d_range[0]) & (pd <= d_range[1]) & (c >= 0) & (c < ncol) & (r >= 0) & (r < nrow)
-    return r[ok].astype(np.int64), c[ok].astype(np.int64), pd[ok]
 
 
 def _step(region: np.ndarray, depth: tuple[IntArray, IntArray, FloatArray]) -> float:
