@@ -185,6 +185,38 @@ def test_workers_make_the_same_files_as_the_run_alone(apartment):
         assert here[name] == there[name], name
 
 
+def test_a_run_with_workers_writes_what_a_run_alone_writes(apartment, tmp_path):
+    """``meshplan.run`` hands the drawings the orientation alone decides (the pen-and-ink plans,
+    the normals, the levels) to its workers before the walls and rooms exist, and makes the
+    models and DXF files itself meanwhile: every file is the same, byte for byte, as a run
+    that draws everything in one process (the report and plan.json aside: they show timings)."""
+    import meshplan
+    from meshplan import export
+
+    submitted: list = []
+    real = export.submit_early
+
+    def spy(pool, oriented):
+        early = real(pool, oriented)
+        submitted.append(early)
+        return early
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(meshplan.api, "submit_early", spy)
+        meshplan.run(apartment, output=tmp_path / "workers", processes=2)
+    meshplan.run(apartment, output=tmp_path / "alone", processes=1)
+    # the early drawings did go to the workers, and were all the pen-and-ink plans
+    assert len(submitted) == 1 and submitted[0] is not None
+    assert all(f is not None for f in submitted[0].futures)
+    early_names = {n for job, f in zip(submitted[0].jobs, submitted[0].futures) for n in f.result()}
+    assert {"pen-and-ink-0.png", "pen-and-ink-0.svg", "pen-and-ink-0.pdf", "normals.png", "levels.png"} <= early_names
+    names = sorted(p.name for p in (tmp_path / "alone").iterdir())
+    assert names == sorted(p.name for p in (tmp_path / "workers").iterdir())
+    for name in names:
+        if name not in ("report.html", "plan.json"):
+            assert (tmp_path / "alone" / name).read_bytes() == (tmp_path / "workers" / name).read_bytes(), name
+
+
 def _priority() -> int:
     return os.getpriority(os.PRIO_PROCESS, 0)
 

@@ -1,8 +1,8 @@
 """The whole job, from a scan on disk to plans: :func:`run` (also exposed as ``meshplan.run``).
 
 Read the scan, compute every stage (:func:`meshplan.pipeline.compute`) while the drawing workers
-get ready (:class:`meshplan.export.RenderPool`), then draw and write every file at once,
-atomically (:func:`meshplan.export.write_results`: a failure leaves nothing behind). The
+get ready (:class:`meshplan.export.RenderPool`) and draw what the orientation alone decides, then
+draw and write every file at once, atomically (:func:`meshplan.export.write_results`: a failure leaves nothing behind). The
 command line is a thin layer over :func:`run`; this module sits above everything it uses.
 """
 
@@ -16,13 +16,13 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-from .export import RenderPool, _processes, write_results
+from .export import RenderPool, _processes, submit_early, write_results
 from .geometry import Annotations
 from .io import check_output_dir, load_annotations, load_mesh
 from .options import RunOptions
 from .pipeline import compute
 from .plan.elements import load_room_edits
-from .result import Progress, Result, _Timer
+from .result import Oriented, Progress, Result, _Timer
 
 log = logging.getLogger(__name__)
 
@@ -101,10 +101,16 @@ def run(
             explicit = params.get("units") is not None if "units" in params else None
             loaded = load_mesh(scan, options.input.units, options.input.max_faces, point_voxel_m=options.input.point_voxel_m, units_explicit=explicit)
             ann = load_annotations(annotations, loaded.stats.scale_to_m) if annotations is not None else Annotations()
-        result = compute(loaded.mesh, loaded.stats, ann, options, timer, units_explicit=explicit, room_edits=edits)
+        early: list = []  # the drawings handed to the workers once the scan is oriented
+
+        def draw_early(oriented: Oriented) -> None:
+            if output is not None:
+                early.append(submit_early(pool, oriented))
+
+        result = compute(loaded.mesh, loaded.stats, ann, options, timer, units_explicit=explicit, room_edits=edits, on_oriented=draw_early)
         if loaded.warnings:  # the reader's (float32 precision) first, before the stages'
             result = replace(result, warnings=(*loaded.warnings, *result.warnings))
         if output is None:
             return replace(result, timings={**timer.timings, "total": time.perf_counter() - t0})
-        written = write_results(result, Path(output), force=force, timer=timer, started=t0, pool=pool)
+        written = write_results(result, Path(output), force=force, timer=timer, started=t0, pool=pool, early=early[0] if early else None)
     return replace(result, output_dir=written.output_dir, files=written.files, timings=written.timings)

@@ -7,6 +7,7 @@ Stages only compute; reading the scan, drawing and writing the files are the run
 from __future__ import annotations
 
 import logging
+from collections.abc import Callable
 
 import numpy as np
 
@@ -21,7 +22,7 @@ from .plan.elements import ModelName, RoomEdit, mark_low_confidence, name_rooms,
 from .plan.parametric import apply_parametric
 from .plan.stairs import attach_rooms
 from .plan.symbols import plan_symbols
-from .result import PAPER_FACES, PAPER_TIMINGS_S, STAGES, Progress, Result, StoryPlans, _read_only, _Timer
+from .result import PAPER_FACES, PAPER_TIMINGS_S, STAGES, Oriented, Progress, Result, StoryPlans, _read_only, _Timer
 from .slicing import slice_mesh
 from .updown import WEAK_SIGN_EVIDENCE, settle_up
 from .updown import up_by_doors as _up_by_doors
@@ -38,6 +39,7 @@ __all__ = [
     "PAPER_TIMINGS_S",
     "STAGES",
     "WEAK_SIGN_EVIDENCE",
+    "Oriented",
     "Progress",
     "Result",
     "StoryPlans",
@@ -87,6 +89,31 @@ def check_not_flat(mesh: Mesh) -> None:
         )
 
 
+def _annotation_story(annotations: Annotations, orientation) -> np.ndarray:
+    """The story index of each annotation (plan frame), by its height."""
+    if not len(annotations):
+        return np.zeros(0, np.int64)
+    return assign_faces(annotations.positions[:, 1], orientation.stories)
+
+
+def _oriented(stats: LoadStats, options: RunOptions, orientation, plan_mesh: Mesh, plan_annotations: Annotations) -> Oriented:
+    """What the oriented scan alone decides: each story's pen-and-ink plan and annotations."""
+    ann_story = _annotation_story(plan_annotations, orientation)
+    pens, anns = [], []
+    for story in orientation.stories:
+        sel = np.flatnonzero(ann_story == story.index)
+        anns.append(
+            Annotations(
+                tuple(plan_annotations.labels[i] for i in sel),
+                tuple(plan_annotations.kinds[i] for i in sel),
+                plan_annotations.positions[sel],
+                plan_annotations.directions[sel],
+            )
+        )
+        pens.append(pen_and_ink(plan_mesh, orientation, story, options.plan, options.orient.slab_tolerance_m))
+    return Oriented(stats, options, orientation, plan_mesh, tuple(pens), tuple(anns))
+
+
 def compute(
     mesh: Mesh,
     stats: LoadStats,
@@ -95,6 +122,7 @@ def compute(
     timer: _Timer | None = None,
     units_explicit: bool | None = None,
     room_edits: tuple[RoomEdit, ...] = (),
+    on_oriented: Callable[[Oriented], None] | None = None,
 ) -> Result:
     """Run every computing stage on an already loaded mesh (input coordinates, metres).
 
@@ -103,12 +131,16 @@ def compute(
     (``--rooms``, :func:`meshplan.plan.elements.load_room_edits`) whose numbers, names and types
     the matching rooms take. Units, up axis and the building itself are
     checked against the geometry (:func:`meshplan.plausibility.orient_plausibly`).
+    ``on_oriented`` is called once the scan is oriented and its pen-and-ink plans are cut, with
+    what the later stages do not change (:class:`~meshplan.result.Oriented`): the run API hands
+    those drawings to its workers then, so that they are drawn while the walls and rooms are
+    computed.
 
     The stages run with :data:`meshplan.geometry.BLAS_THREADS` BLAS thread: their products are
     thin, and the drawing workers run beside them on the other cores.
     """
     with few_blas_threads():
-        return _compute(mesh, stats, annotations, options, timer, units_explicit, room_edits)
+        return _compute(mesh, stats, annotations, options, timer, units_explicit, room_edits, on_oriented)
 
 
 def _compute(
@@ -119,6 +151,7 @@ def _compute(
     timer: _Timer | None,
     units_explicit: bool | None,
     room_edits: tuple[RoomEdit, ...],
+    on_oriented: Callable[[Oriented], None] | None,
 ) -> Result:
     """:func:`compute` itself, under its BLAS thread limit."""
     from .plausibility import orient_plausibly
@@ -138,6 +171,10 @@ def _compute(
         # (corners, cross products, normals, centroids: 0.45 GB at 3M faces) would only add to
         # the run's peak, which the drawing stage reaches
         mesh.release_derived()
+    with timer.stage("slice_draw"):  # its first part: what needs the orientation alone
+        oriented = _oriented(stats, options, orientation, plan_mesh, plan_annotations)
+        if on_oriented is not None:
+            on_oriented(oriented)
     with timer.stage("walls"):
         walls = upright.walls if upright.walls is not None else find_flat_walls(plan_mesh, orientation, options.walls)
     with timer.stage("rooms"):
@@ -163,24 +200,16 @@ def _compute(
         rooms = type_rooms(rooms, elements, openings.kind, stairs)
         stairs = attach_rooms(stairs, rooms)
     with timer.stage("slice_draw"):
-        ann_story = assign_faces(plan_annotations.positions[:, 1], orientation.stories) if len(plan_annotations) else np.zeros(0, np.int64)
         plans = []
         heights, normal_y = plan_mesh.face_centroids[:, 1], plan_mesh.face_normals[:, 1]
-        for story in orientation.stories:
-            sel = np.flatnonzero(ann_story == story.index)
-            story_ann = Annotations(
-                tuple(plan_annotations.labels[i] for i in sel),
-                tuple(plan_annotations.kinds[i] for i in sel),
-                plan_annotations.positions[sel],
-                plan_annotations.directions[sel],
-            )
+        for story, pen, story_ann in zip(orientation.stories, oriented.pen_and_ink, oriented.story_annotations, strict=True):
             in_story = orientation.face_story == story.index
             story_faces = np.flatnonzero(in_story)
             cut = mark_low_confidence(drafting(walls, story, options.plan, openings.holes()), walls, physical, rooms, openings, elements)
             plans.append(
                 StoryPlans(
                     story=story,
-                    pen_and_ink=pen_and_ink(plan_mesh, orientation, story, options.plan, options.orient.slab_tolerance_m),
+                    pen_and_ink=pen,
                     drafting=cut,
                     annotations=story_ann,
                     symbols=plan_symbols(story.index, walls, openings, rooms, physical, options.render.imperial, stairs=stairs),
@@ -205,7 +234,7 @@ def _compute(
         stories=tuple(plans),
         timings=timer.timings,
         warnings=tuple(warnings),
-        annotation_story=ann_story,
+        annotation_story=_annotation_story(plan_annotations, orientation),
         opening_elements=elements,
         stairs=stairs,
     )

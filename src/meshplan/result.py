@@ -43,6 +43,31 @@ Progress = Callable[[str, str], None]  # (stage, "start" | "done")
 
 
 @dataclass(frozen=True, eq=False)
+class Oriented:
+    """What the stages know once the scan is oriented, before its walls and rooms: enough for
+    the drawings that need no more (each story's pen-and-ink plan, the normals and the levels),
+    which the run has its workers draw while the later stages compute (see
+    :func:`meshplan.pipeline.compute`'s ``on_oriented``).
+
+    Attributes
+    ----------
+    input, options, orientation, mesh
+        As in :class:`Result` (the same objects).
+    pen_and_ink
+        Each story's pen-and-ink plan, in story order.
+    story_annotations
+        The annotations on each story (plan frame), in story order.
+    """
+
+    input: LoadStats
+    options: RunOptions
+    orientation: Orientation
+    mesh: Mesh
+    pen_and_ink: tuple[PenAndInkPlan, ...]
+    story_annotations: tuple[Annotations, ...]
+
+
+@dataclass(frozen=True, eq=False)
 class StoryPlans:
     """Everything drawn for one story."""
 

@@ -14,8 +14,6 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-import numpy as np
-
 from ..io import staged_directory
 from ..render import (
     drafting_figure,
@@ -26,17 +24,19 @@ from ..render import (
     pen_and_ink_figure,
     segments_figure,
 )
+from ..result import Oriented
 from .dxf import drafting_dxf
 from .glb import WALL_RGBA, glb_bytes, submesh
 from .planjson import dumps, plan_document, plan_schema
 from .report import report_html, report_page
 
 if TYPE_CHECKING:  # pragma: no cover
+    from ..render.sheet import Sheet
     from ..result import Result, _Timer
 
 log = logging.getLogger(__name__)
 
-__all__ = ["RenderPool", "Written", "dumps", "plan_document", "plan_schema", "render_files", "write_results"]
+__all__ = ["EarlyDrawings", "RenderPool", "Written", "dumps", "plan_document", "plan_schema", "render_files", "submit_early", "write_results"]
 
 
 # ---------------------------------------------------------------------------------------------
@@ -104,25 +104,52 @@ def _model_jobs(result: Result) -> list[tuple]:
     return jobs
 
 
+def _early_jobs(oriented: Oriented | Result) -> list[tuple]:
+    """``(function, *arguments)`` of the drawings the oriented scan alone decides (each story's
+    pen-and-ink plan, the normals, the levels), from an :class:`~meshplan.result.Oriented` (the
+    run submits them before its walls and rooms exist) or a result, slowest first."""
+    o, mesh, params = oriented.orientation, oriented.mesh, oriented.options.render
+    if isinstance(oriented, Oriented):
+        pens, anns = oriented.pen_and_ink, oriented.story_annotations
+    else:
+        pens, anns = tuple(sp.pen_and_ink for sp in oriented.stories), tuple(sp.annotations for sp in oriented.stories)
+    n = len(o.stories)
+    # the title block names the scan file (not its directory) and the north arrow follows --north-deg
+    scan, north = Path(oriented.input.path).name, oriented.options.export.north_deg
+    jobs: list[tuple] = [
+        (_pen_files, pen, ann, _sheet(oriented, story.index), params, n, ("png", "svg", "pdf"), scan, north)
+        for story, pen, ann in zip(o.stories, pens, anns, strict=True)
+    ]
+    jobs += [(_normals_files, mesh.face_normals, mesh.face_areas, o), (_levels_files, o, params)]
+    return jobs
+
+
+def _sheet(oriented: Oriented | Result, story: int) -> Sheet:
+    """The sheet of every plan of ``story``: the page around the story's faces."""
+    o, mesh = oriented.orientation, oriented.mesh
+    return make_sheet(mesh.face_centroids[o.face_story == story][:, [0, 2]], oriented.options.render)
+
+
 def _jobs(result: Result) -> tuple[list[tuple], list[tuple]]:
-    """``(function, *arguments)`` of the drawings (the paper's slicing and drawing), slowest
-    first, and of the DXF files: every file but the 3D models and the report."""
-    o, mesh, params = result.orientation, result.mesh, result.options.render
+    """``(function, *arguments)`` of the drawings that need the walls and rooms (the drafting
+    plans, the wall segments), slowest first, and of the DXF files."""
+    params = result.options.render
     n = len(result.stories)
     jobs: list[tuple] = []
     dxf: list[tuple] = []
+    scan, north = Path(result.input.path).name, result.options.export.north_deg
     for sp in result.stories:
         i = sp.story.index
-        sheet = make_sheet(mesh.face_centroids[o.face_story == i][:, [0, 2]], params)
+        sheet = _sheet(result, i)
         symbols = sp.symbols
-        # the title block names the scan file (not its directory) and the north arrow follows --north-deg
-        scan, north = Path(result.input.path).name, result.options.export.north_deg
-        jobs.append((_pen_files, sp.pen_and_ink, sp.annotations, sheet, params, n, ("png", "svg", "pdf"), scan, north))
-        jobs.append((_drafting_files, sp.drafting, sp.annotations, sheet, params, n, symbols, ("png", "svg", "pdf"), scan, north))
-        jobs.append((_segments_files, mesh.face_centroids, result.walls, i, sheet, params, n))
+        # the drafting plan is what the run waits for once its stages are done: its raster and
+        # its vector files are drawn by two workers at once (the figure is made by both, a
+        # tenth of the job; 0.25 s sooner on the 300k-face apartment)
+        for fmts in (("png",), ("svg", "pdf")):
+            jobs.append((_drafting_files, sp.drafting, sp.annotations, sheet, params, n, symbols, fmts, scan, north))
+        jobs.append((_segments_files, result.mesh.face_centroids, result.walls, i, sheet, params, n))
         rooms = [r for r in result.rooms if r.story == i]
         dxf.append((_dxf_files, i, sp.drafting.slices.segments, sp.reference, sp.annotations, symbols, rooms))
-    jobs += [(_normals_files, mesh.face_normals, mesh.face_areas, o), (_levels_files, o, params)]
     return jobs, dxf
 
 
@@ -226,16 +253,12 @@ def _start_worker(parent: int) -> None:
 
 
 def _warm_up() -> None:
-    """Import what the jobs use and use it once, while the run computes its stages: a fresh
-    process's first figure imports matplotlib, loads the fonts and sets up each backend (about
-    0.5 s), its first DXF file imports ezdxf (0.25 s) and its first GLB model trimesh and its
-    glTF exporter (0.2 s); each would otherwise delay the drawings by as much."""
+    """Get matplotlib ready while the run computes its stages: a fresh process's first figure
+    imports matplotlib, loads the fonts and sets up each backend (about 0.4 s), which would
+    otherwise delay the first drawing by as much. The workers only draw: the DXF files and the
+    GLB models are made by the run itself while it waits for the drawings (see
+    :func:`render_files`), so ezdxf and trimesh's exporter are not imported here."""
     _warm_matplotlib()
-    import ezdxf  # noqa: F401 - imported for its cost, here rather than in the first DXF job
-
-    from ..geometry import Mesh
-
-    glb_bytes(Mesh(np.eye(3), np.array([[0, 1, 2]])), None, "warm-up")
 
 
 def _warm_matplotlib() -> None:
@@ -263,14 +286,12 @@ class RenderPool:
     """Worker processes that draw the plans, started before there is anything to draw.
 
     :func:`meshplan.api.run` opens one when a run starts: the workers are forked while the
-    process is still small, and each gets its libraries ready (:func:`_warm_up`: about a second
-    at low priority) on the other cores while this process reads the scan and computes the
-    stages. The jobs then get what they draw as arguments. With ``processes`` 1 (or off Linux)
-    there are no workers and everything is drawn here. On this project's 2-core machine two
-    warm workers make a 300k-face apartment's files in 0.55-0.65 of the time this process
-    alone takes, for about 0.7 s more CPU time (the second worker's start-up); low priority
-    while warming up lets the stages end 0.5-0.8 s sooner than at the run's priority (the
-    workers take the run's priority back for the drawings where allowed, see _start_worker).
+    process is still small, and each gets matplotlib ready (:func:`_warm_up`, at low priority)
+    on the other cores while this process reads the scan and orients it. The drawings that need
+    the orientation alone (the pen-and-ink plans, the normals, the levels) are handed to them as
+    soon as it is known (:func:`submit_early`) and drawn while the walls and rooms are computed;
+    the drafting plans follow. The jobs get what they draw as arguments. With ``processes`` 1
+    (or off Linux) there are no workers and everything is drawn here.
     """
 
     def __init__(self, processes: int) -> None:
@@ -367,15 +388,34 @@ def _cad_files(result: Result) -> dict[str, bytes]:
     return files
 
 
-def render_files(result: Result, timer: _Timer | None = None, pool: RenderPool | None = None) -> dict[str, bytes]:
+@dataclass(frozen=True, eq=False)
+class EarlyDrawings:
+    """Drawings handed to a pool's workers before the result existed (:func:`submit_early`):
+    the jobs and their futures (``None`` where no worker took the job)."""
+
+    jobs: list[tuple]
+    futures: list
+
+
+def submit_early(pool: RenderPool | None, oriented: Oriented) -> EarlyDrawings | None:
+    """Hand the drawings the oriented scan alone decides to the workers of ``pool`` (none
+    without workers: :func:`render_files` then draws everything itself)."""
+    if pool is None or pool.executor is None:
+        return None
+    jobs = _early_jobs(oriented)
+    return EarlyDrawings(jobs, _submit(pool, jobs))
+
+
+def render_files(result: Result, timer: _Timer | None = None, pool: RenderPool | None = None, early: EarlyDrawings | None = None) -> dict[str, bytes]:
     """Every output file except plan.json, as ``name -> bytes``, in a deterministic order.
 
-    The drawings, the GLB models and the DXF files are made by the workers of ``pool`` (one is
-    opened here when none is given and ``RenderParams.processes`` asks for workers); meanwhile
-    this process makes what the report needs of the result. The drawings count as the paper's
-    slicing-and-drawing time (``slice_draw``: from their start until the last one is in); the
-    rest (models, DXF files, report) as ``write``. The stages follow each other, so that their
-    times add up to the wall time.
+    The drawings are made by the workers of ``pool`` (one is opened here when none is given and
+    ``RenderParams.processes`` asks for workers), those of ``early`` already under way; meanwhile
+    this process makes the GLB models, the DXF files and what the report needs of the result
+    (none of which draws a figure). Without workers everything is made here. The drawings count
+    as the paper's slicing-and-drawing time (``slice_draw``: until the last one is in); the rest
+    (models, DXF files, report) as ``write``. The stages follow each other, so that their times
+    add up to the wall time.
     """
     from contextlib import ExitStack, nullcontext
 
@@ -385,24 +425,28 @@ def render_files(result: Result, timer: _Timer | None = None, pool: RenderPool |
         if pool is None:
             pool = stack.enter_context(RenderPool(_processes(result.options.render)))
         with stage("slice_draw"):
-            drawings, dxf = _jobs(result)
-            models = _model_jobs(result)
-            # the drawings first (the slowest, the pen-and-ink and drafting plans, at the head:
-            # no worker is left with a long job at the end), then what only the report waits for
-            later = models + dxf
-            pending = _submit(pool, drawings + later)
+            later, dxf = _jobs(result)
+            if early is None:  # none under way: this result's own
+                jobs = _early_jobs(result)
+                early = EarlyDrawings(jobs, _submit(pool, jobs))
+            # the slowest first (the drafting plans at the head: no worker is left with a long
+            # job at the end)
+            drawings = early.jobs + later
+            pending = list(early.futures) + _submit(pool, later)
             parallel = any(f is not None for f in pending)
             page = None
             if parallel:  # the workers draw: make here what needs no drawing
                 files.update(_cad_files(result))
+                for job in _model_jobs(result) + dxf:
+                    files.update(_call(job))
                 page = report_page(result)
             for job, future in zip(drawings, pending):
                 files.update(_result(job, future))
         with stage("write"):
             if not parallel:
                 files.update(_cad_files(result))
-            for job, future in zip(later, pending[len(drawings) :]):
-                files.update(_result(job, future))
+                for job in _model_jobs(result) + dxf:
+                    files.update(_call(job))
             # last: the report inlines the other files
             files["report.html"] = report_html(result, files, page=page).encode("utf-8")
     return dict(sorted(files.items()))
@@ -429,15 +473,21 @@ class Written:
 
 
 def write_results(
-    result: Result, outdir: Path, force: bool = False, timer: _Timer | None = None, started: float | None = None, pool: RenderPool | None = None
+    result: Result,
+    outdir: Path,
+    force: bool = False,
+    timer: _Timer | None = None,
+    started: float | None = None,
+    pool: RenderPool | None = None,
+    early: EarlyDrawings | None = None,
 ) -> Written:
     """Render and write every output of ``result`` into ``outdir`` (atomically), drawing with
-    the workers of ``pool`` when given.
+    the workers of ``pool`` when given (``early``: the drawings already handed to them).
 
     ``result`` is left as it is; the run API makes the final result from what this returns
     (``dataclasses.replace(result, output_dir=..., files=..., timings=...)``).
     """
-    files = render_files(result, timer, pool)
+    files = render_files(result, timer, pool, early)
     t0 = time.perf_counter()
     with staged_directory(outdir, force=force) as tmp:
         for name, data in files.items():
