@@ -1,9 +1,9 @@
 """The whole job, from a scan on disk to plans: :func:`run` (also exposed as ``meshplan.run``).
 
 Read the scan, compute every stage (:func:`meshplan.pipeline.compute`) while the drawing workers
-get ready (:class:`meshplan.export.RenderPool`) and draw what the orientation alone decides, then
-draw and write every file at once, atomically (:func:`meshplan.export.write_results`: a failure leaves nothing behind). The
-command line is a thin layer over :func:`run`; this module sits above everything it uses.
+get ready (:class:`meshplan.export.RenderPool`) and draw what the orientation alone decides,
+then draw and write every file at once, atomically (:func:`meshplan.export.write_results`: a
+failure leaves nothing behind). The command line is a thin layer over :func:`run`; this module sits above everything it uses.
 """
 
 from __future__ import annotations
@@ -101,11 +101,10 @@ def run(
             explicit = params.get("units") is not None if "units" in params else None
             loaded = load_mesh(scan, options.input.units, options.input.max_faces, point_voxel_m=options.input.point_voxel_m, units_explicit=explicit)
             ann = load_annotations(annotations, loaded.stats.scale_to_m) if annotations is not None else Annotations()
-        early: list = []  # the drawings handed to the workers once the scan is oriented
+        early: list = []  # the drawings handed to the workers (if any) once the scan is oriented
 
         def draw_early(oriented: Oriented) -> None:
-            if output is not None:
-                early.append(submit_early(pool, oriented))
+            early.append(submit_early(pool, oriented))
 
         result = compute(loaded.mesh, loaded.stats, ann, options, timer, units_explicit=explicit, room_edits=edits, on_oriented=draw_early)
         if loaded.warnings:  # the reader's (float32 precision) first, before the stages'

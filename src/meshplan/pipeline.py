@@ -39,7 +39,6 @@ __all__ = [
     "PAPER_TIMINGS_S",
     "STAGES",
     "WEAK_SIGN_EVIDENCE",
-    "Oriented",
     "Progress",
     "Result",
     "StoryPlans",
@@ -89,16 +88,12 @@ def check_not_flat(mesh: Mesh) -> None:
         )
 
 
-def _annotation_story(annotations: Annotations, orientation) -> np.ndarray:
-    """The story index of each annotation (plan frame), by its height."""
-    if not len(annotations):
-        return np.zeros(0, np.int64)
-    return assign_faces(annotations.positions[:, 1], orientation.stories)
-
-
 def _oriented(stats: LoadStats, options: RunOptions, orientation, plan_mesh: Mesh, plan_annotations: Annotations) -> Oriented:
     """What the oriented scan alone decides: each story's pen-and-ink plan and annotations."""
-    ann_story = _annotation_story(plan_annotations, orientation)
+    if len(plan_annotations):
+        ann_story = assign_faces(plan_annotations.positions[:, 1], orientation.stories)
+    else:
+        ann_story = np.zeros(0, np.int64)
     pens, anns = [], []
     for story in orientation.stories:
         sel = np.flatnonzero(ann_story == story.index)
@@ -111,7 +106,7 @@ def _oriented(stats: LoadStats, options: RunOptions, orientation, plan_mesh: Mes
             )
         )
         pens.append(pen_and_ink(plan_mesh, orientation, story, options.plan, options.orient.slab_tolerance_m))
-    return Oriented(stats, options, orientation, plan_mesh, tuple(pens), tuple(anns))
+    return Oriented(stats, options, orientation, plan_mesh, tuple(pens), tuple(anns), ann_story)
 
 
 def compute(
@@ -234,7 +229,7 @@ def _compute(
         stories=tuple(plans),
         timings=timer.timings,
         warnings=tuple(warnings),
-        annotation_story=_annotation_story(plan_annotations, orientation),
+        annotation_story=oriented.annotation_story,
         opening_elements=elements,
         stairs=stairs,
     )

@@ -57,6 +57,8 @@ class Oriented:
         Each story's pen-and-ink plan, in story order.
     story_annotations
         The annotations on each story (plan frame), in story order.
+    annotation_story
+        The story index of each of the run's annotations (:attr:`Result.annotation_story`).
     """
 
     input: LoadStats
@@ -65,6 +67,7 @@ class Oriented:
     mesh: Mesh
     pen_and_ink: tuple[PenAndInkPlan, ...]
     story_annotations: tuple[Annotations, ...]
+    annotation_story: np.ndarray
 
 
 @dataclass(frozen=True, eq=False)

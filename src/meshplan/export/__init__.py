@@ -104,24 +104,31 @@ def _model_jobs(result: Result) -> list[tuple]:
     return jobs
 
 
-def _early_jobs(oriented: Oriented | Result) -> list[tuple]:
+def _early_jobs(oriented: Oriented) -> list[tuple]:
     """``(function, *arguments)`` of the drawings the oriented scan alone decides (each story's
-    pen-and-ink plan, the normals, the levels), from an :class:`~meshplan.result.Oriented` (the
-    run submits them before its walls and rooms exist) or a result, slowest first."""
+    pen-and-ink plan, the normals, the levels), slowest first: the run submits them before its
+    walls and rooms exist (:func:`submit_early`)."""
     o, mesh, params = oriented.orientation, oriented.mesh, oriented.options.render
-    if isinstance(oriented, Oriented):
-        pens, anns = oriented.pen_and_ink, oriented.story_annotations
-    else:
-        pens, anns = tuple(sp.pen_and_ink for sp in oriented.stories), tuple(sp.annotations for sp in oriented.stories)
     n = len(o.stories)
-    # the title block names the scan file (not its directory) and the north arrow follows --north-deg
-    scan, north = Path(oriented.input.path).name, oriented.options.export.north_deg
+    scan, north = _title(oriented)
     jobs: list[tuple] = [
         (_pen_files, pen, ann, _sheet(oriented, story.index), params, n, ("png", "svg", "pdf"), scan, north)
-        for story, pen, ann in zip(o.stories, pens, anns, strict=True)
+        for story, pen, ann in zip(o.stories, oriented.pen_and_ink, oriented.story_annotations, strict=True)
     ]
     jobs += [(_normals_files, mesh.face_normals, mesh.face_areas, o), (_levels_files, o, params)]
     return jobs
+
+
+def _oriented_of(result: Result) -> Oriented:
+    """What of ``result`` the oriented scan alone decided (for :func:`_early_jobs`)."""
+    pens = tuple(sp.pen_and_ink for sp in result.stories)
+    anns = tuple(sp.annotations for sp in result.stories)
+    return Oriented(result.input, result.options, result.orientation, result.mesh, pens, anns, result.annotation_story)
+
+
+def _title(oriented: Oriented | Result) -> tuple[str, float]:
+    """``(scan, north)`` of the title block: the scan file (not its directory), --north-deg."""
+    return Path(oriented.input.path).name, oriented.options.export.north_deg
 
 
 def _sheet(oriented: Oriented | Result, story: int) -> Sheet:
@@ -137,7 +144,7 @@ def _jobs(result: Result) -> tuple[list[tuple], list[tuple]]:
     n = len(result.stories)
     jobs: list[tuple] = []
     dxf: list[tuple] = []
-    scan, north = Path(result.input.path).name, result.options.export.north_deg
+    scan, north = _title(result)
     for sp in result.stories:
         i = sp.story.index
         sheet = _sheet(result, i)
@@ -388,6 +395,15 @@ def _cad_files(result: Result) -> dict[str, bytes]:
     return files
 
 
+def _undrawn_files(result: Result, dxf: list[tuple]) -> dict[str, bytes]:
+    """The files no figure is drawn for, made in this process: the IFC and energy models, the
+    GLB models and the DXF files (the jobs ``dxf``)."""
+    files = _cad_files(result)
+    for job in _model_jobs(result) + dxf:
+        files.update(_call(job))
+    return files
+
+
 @dataclass(frozen=True, eq=False)
 class EarlyDrawings:
     """Drawings handed to a pool's workers before the result existed (:func:`submit_early`):
@@ -427,26 +443,22 @@ def render_files(result: Result, timer: _Timer | None = None, pool: RenderPool |
         with stage("slice_draw"):
             later, dxf = _jobs(result)
             if early is None:  # none under way: this result's own
-                jobs = _early_jobs(result)
+                jobs = _early_jobs(_oriented_of(result))
                 early = EarlyDrawings(jobs, _submit(pool, jobs))
-            # the slowest first (the drafting plans at the head: no worker is left with a long
-            # job at the end)
+            # the early ones first (under way, or the slowest: the pen-and-ink plans), then the
+            # drafting plans: no worker is left with a long job at the end
             drawings = early.jobs + later
             pending = list(early.futures) + _submit(pool, later)
             parallel = any(f is not None for f in pending)
             page = None
             if parallel:  # the workers draw: make here what needs no drawing
-                files.update(_cad_files(result))
-                for job in _model_jobs(result) + dxf:
-                    files.update(_call(job))
+                files.update(_undrawn_files(result, dxf))
                 page = report_page(result)
             for job, future in zip(drawings, pending):
                 files.update(_result(job, future))
         with stage("write"):
             if not parallel:
-                files.update(_cad_files(result))
-                for job in _model_jobs(result) + dxf:
-                    files.update(_call(job))
+                files.update(_undrawn_files(result, dxf))
             # last: the report inlines the other files
             files["report.html"] = report_html(result, files, page=page).encode("utf-8")
     return dict(sorted(files.items()))
