@@ -52,10 +52,6 @@ TRUE_UP = {
 
 #: Scans on which up is still wrong (issue 9, open): strict, so that a fix shows as XPASS.
 KNOWN_WRONG = {
-    "hl1_dangwalsh_desk_fragment.obj": (
-        "a fragment: 4.6 m2 of wall against 0.4 m2 of floor, the wall axis scores 4 times the floor's; "
-        "given the axis (--up +y) up is 0.7 degrees off"
-    ),
     "tango_rainfiel_room_rescan.ply": (
         "no truth, so measured against the device's up: axis right, 1.4 degrees off, as the scanned floor itself is "
         "tilted 0.9-1.4 degrees from it by every floor estimate (normals 1.1, positions 1.4); only the walls (0.25) agree"
@@ -87,7 +83,7 @@ def test_every_readable_scan_is_listed():
 def test_up_within_a_degree(name):
     loaded = load_mesh(real_scan(name))
     # row 1 of the rotation: up in input coordinates (with the up the file's format declares)
-    up_found = orient(loaded.mesh, declared_up=loaded.stats.declared_up).transform[1, :3]
+    up_found = orient(loaded.mesh, declared_up=loaded.stats.declared_up, declared_by=loaded.stats.declared_by).transform[1, :3]
     error = angle_deg(up_found, _true_up(name))
     assert error < MAX_ERROR_DEG, f"up {np.round(up_found, 3).tolist()} is {error:.2f} degrees off"
 
@@ -102,3 +98,24 @@ def test_a_gltf_file_gets_its_declared_up_when_the_geometry_cannot_decide():
     assert angle_deg(orient(loaded.mesh, declared_up=loaded.stats.declared_up).transform[1, :3], _true_up(name)) < MAX_ERROR_DEG
     # without the format's word the wall pair wins: the prior is what decides
     assert angle_deg(orient(loaded.mesh).transform[1, :3], _true_up(name)) > 45
+
+
+#: The HoloLens 1 Device Portal exports among the scans (MANIFEST.md: "Device-Portal export").
+DEVICE_PORTAL = ("hl1_ashro_room_45deg.obj", "hl1_cuny_room_sparse_walls.obj", "hl1_dangwalsh_desk_fragment.obj", "hl1_holosoma_room_sparse_walls.obj")
+
+
+def test_hololens_device_portal_exports_are_read_in_their_device_frame():
+    """Every Device Portal OBJ is recognised as written in the HoloLens' gravity-aligned frame,
+    no other scan is; on the desk fragment that frame is what puts up right (its geometry
+    alone takes the wall's axis: 4.6 m2 of wall against 0.4 m2 of floor)."""
+    if not SCANS.is_dir():
+        pytest.skip("../shared/scans not available")
+    for name in TRUE_UP:
+        path = SCANS / name
+        if not path.is_file() or path.suffix.lower() not in (".obj", ".ply"):
+            continue
+        assert (load_mesh(path).stats.declared_by == "device") == (name in DEVICE_PORTAL), name
+    loaded = load_mesh(real_scan("hl1_dangwalsh_desk_fragment.obj"))
+    o = orient(loaded.mesh, declared_up=loaded.stats.declared_up, declared_by=loaded.stats.declared_by)
+    assert o.gravity.sign_by == "device frame"
+    assert angle_deg(orient(loaded.mesh).transform[1, :3], _true_up("hl1_dangwalsh_desk_fragment.obj")) > 45

@@ -156,6 +156,70 @@ def test_a_declared_up_decides_only_where_the_geometry_cannot():
     assert angle_deg(orient(wide, declared_up=np.array([1.0, 0.0, 0.0])).transform[1, :3], [0, 1, 0]) < 0.5
 
 
+def _fragment() -> Mesh:
+    """A scan fragment as a HoloLens saves one at a desk: a 3 x 2.5 m wall, a patch of floor
+    (0.7 m2), a desk top 0.7 m above it and the desk's front; far more wall than floor."""
+
+    def grid(origin, du, dv, nu, nv):
+        o, du, dv = (np.asarray(a, float) for a in (origin, du, dv))
+        i, j = np.meshgrid(np.arange(nu + 1), np.arange(nv + 1), indexing="ij")
+        p = (o + i[..., None] * du / nu + j[..., None] * dv / nv).reshape(-1, 3)
+        idx = (i * (nv + 1) + j)[:-1, :-1].reshape(-1)
+        return p, np.r_[np.c_[idx, idx + nv + 1, idx + nv + 2], np.c_[idx, idx + nv + 2, idx + 1]]
+
+    parts = [
+        grid([0, 0, 0], [3, 0, 0], [0, 2.5, 0], 30, 25),
+        grid([0, 0, 0.05], [0, 0, 0.6], [1.2, 0, 0], 6, 12),
+        grid([1.5, 0.7, 0.05], [0, 0, 0.6], [1.2, 0, 0], 6, 12),
+        grid([1.5, 0, 0.65], [1.2, 0, 0], [0, 0.7, 0], 12, 7),
+    ]
+    offsets = np.cumsum([0] + [len(p) for p, _ in parts[:-1]])
+    return Mesh(np.concatenate([p for p, _ in parts]), np.concatenate([q + k for (_, q), k in zip(parts, offsets)]))
+
+
+def test_a_device_frame_decides_where_a_format_convention_would_not():
+    """The geometry of a fragment puts up along the wall's normal (its score is four times the
+    floor's): a file format's convention (a prior within FORMAT_PRIOR_SHARE) does not change
+    that, the gravity-aligned frame of the device that scanned it does, sign included."""
+    mesh = _fragment()
+    y = np.array([0.0, 1.0, 0.0])
+    by_format = orient(mesh, declared_up=y, declared_by="format")
+    assert angle_deg(by_format.transform[1, :3], y) > 80  # the geometry alone: the wall's axis
+    by_device = orient(mesh, declared_up=y, declared_by="device")
+    assert angle_deg(by_device.transform[1, :3], y) < 0.5
+    assert by_device.gravity.sign_by == "device frame"
+    # upside down, the device frame still says which way is up
+    flipped = orient(Mesh(mesh.vertices * [1.0, -1.0, 1.0], mesh.faces[:, ::-1]), declared_up=-y, declared_by="device")
+    assert angle_deg(flipped.transform[1, :3], -y) < 0.5
+
+
+_PORTAL_OBJ = "\n\no Object.1\nv 0.1 0.2 0.3\nv 1.1 0.2 0.3\nv 0.1 0.2 1.3\nvn 0 1 0\nvn 0 1 0\nvn 0 1 0\nf 1//1 3//3 2//2\n\n\no Object.2\nv 0.1 1.2 0.3\nv 1.1 1.2 0.3\nv 0.1 1.2 1.3\nvn 0 -1 0\nvn 0 -1 0\nvn 0 -1 0\nf 4//4 5//5 6//6\n"
+
+
+@pytest.mark.parametrize(
+    "text, device",
+    [
+        (_PORTAL_OBJ, True),
+        (_PORTAL_OBJ.replace("\n", "\r\n"), True),  # Windows line ends
+        ("# Blender 4.2\n" + _PORTAL_OBJ, False),  # another writer's header
+        (_PORTAL_OBJ.replace("o Object.1\n", "o Object.1\nusemtl wall\n"), False),  # materials: not the Device Portal
+        (_PORTAL_OBJ.replace("Object.1", "Wall"), False),
+        (_PORTAL_OBJ.replace("Object.1", "Object.7"), False),  # it numbers its surfaces from 1
+        ("\n".join(_PORTAL_OBJ.splitlines()[3:6]) + "\n" + _PORTAL_OBJ, False),  # vertices before any object
+    ],
+)
+def test_a_hololens_device_portal_obj_declares_its_gravity_aligned_frame(tmp_path, text, device):
+    """A HoloLens Device Portal export is recognised by its layout and declares +y as a
+    device frame; any other OBJ declares nothing."""
+    path = tmp_path / "scan.obj"
+    path.write_bytes(text.encode())
+    stats = load_mesh(path).stats
+    if device:
+        assert stats.declared_by == "device" and np.allclose(stats.declared_up, [0.0, 1.0, 0.0])
+    else:
+        assert stats.declared_by == "format" and stats.declared_up is None
+
+
 def test_a_gltf_file_declares_y_up(tmp_path):
     """The reader declares +y for glTF (by its specification) and nothing for PLY."""
     from meshplan.io import write_mesh

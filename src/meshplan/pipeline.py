@@ -157,7 +157,12 @@ def _compute(
     with timer.stage("orient"):
         check_not_flat(mesh)
         orientation, plausibility_warnings = orient_plausibly(
-            mesh, options.input.units, options.orient, units_explicit, None if stats.declared_up is None else np.asarray(stats.declared_up)
+            mesh,
+            options.input.units,
+            options.orient,
+            units_explicit,
+            None if stats.declared_up is None else np.asarray(stats.declared_up),
+            stats.declared_by,
         )
         upright = settle_up(mesh, orientation, options)  # the doors decide when furniture cannot
         orientation, plan_mesh = upright.orientation, upright.mesh

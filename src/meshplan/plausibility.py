@@ -241,11 +241,12 @@ def building_evidence(mesh: Mesh, orientation: Orientation, params: OrientParams
     )
 
 
-def assess(mesh: Mesh, units: str, params: OrientParams, declared_up: FloatArray | None = None) -> Assessment:
-    """Orient ``mesh`` (metres, as read in ``units``; ``declared_up`` the format's up, see
-    :func:`meshplan.orient.orient`) and measure what the orientation found."""
+def assess(mesh: Mesh, units: str, params: OrientParams, declared_up: FloatArray | None = None, declared_by: str = "format") -> Assessment:
+    """Orient ``mesh`` (metres, as read in ``units``; ``declared_up`` the format's or the
+    device's up, ``declared_by`` which, see :func:`meshplan.orient.orient`) and measure what the
+    orientation found."""
     try:
-        o = orient(mesh, params, declared_up=declared_up)
+        o = orient(mesh, params, declared_up=declared_up, declared_by=declared_by)
     except MeshplanError as exc:
         return Assessment(units, None, exc)
     heights, ceilings = story_heights(mesh, o)
@@ -303,7 +304,7 @@ def _check_up(mesh: Mesh, chosen: Assessment, params: OrientParams) -> None:
 
 
 def orient_plausibly(
-    mesh: Mesh, units: str, params: OrientParams, units_explicit: bool, declared_up: FloatArray | None = None
+    mesh: Mesh, units: str, params: OrientParams, units_explicit: bool, declared_up: FloatArray | None = None, declared_by: str = "format"
 ) -> tuple[Orientation, tuple[str, ...]]:
     """Orient the scan and check that it is a building, in ``units``, the way ``params.up`` says.
 
@@ -319,7 +320,8 @@ def orient_plausibly(
         Whether the user named the units (``--units``), rather than taking the default.
     declared_up
         The up the file's format declares (:attr:`meshplan.io.LoadStats.declared_up`), a prior
-        where the geometry cannot decide.
+        where the geometry cannot decide; ``declared_by`` (:attr:`~meshplan.io.LoadStats.declared_by`)
+        says how strong a prior it is.
 
     Returns
     -------
@@ -332,7 +334,7 @@ def orient_plausibly(
         Units that the geometry contradicts (naming the right one), no building, an ``--up``
         that the geometry contradicts, or any error of the orientation itself.
     """
-    chosen = assess(mesh, units, params, declared_up)
+    chosen = assess(mesh, units, params, declared_up, declared_by)
     if params.up != "auto":
         _check_up(mesh, chosen, params)
     building = chosen.orientation is not None and not chosen.no_building
@@ -349,7 +351,7 @@ def orient_plausibly(
         for u in UNITS_M:
             if u == units:
                 continue
-            a = assess(_rescaled(mesh, UNITS_M[u] / UNITS_M[units]), u, params, declared_up)
+            a = assess(_rescaled(mesh, UNITS_M[u] / UNITS_M[units]), u, params, declared_up, declared_by)
             log.debug("units %s: %s, heights %s, %s", u, a.grade(), np.round(a.heights, 2).tolist(), a.no_building or a.error or "a building")
             if a.plausible:
                 others.append(a)

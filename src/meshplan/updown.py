@@ -54,9 +54,10 @@ class Upright:
 
 def up_in_doubt(orientation: Orientation, options: RunOptions) -> bool:
     """Whether the sign of gravity is left to the doors: ``up`` is ``auto``, gravity was found
-    by k-means and the furniture's evidence is weaker than :data:`WEAK_SIGN_EVIDENCE`."""
+    by k-means, not from the device's gravity-aligned frame (which measured the sign too), and
+    the furniture's evidence is weaker than :data:`WEAK_SIGN_EVIDENCE`."""
     g = orientation.gravity
-    return options.orient.up == "auto" and g.method == "kmeans" and abs(g.sign_evidence) < WEAK_SIGN_EVIDENCE
+    return options.orient.up == "auto" and g.method == "kmeans" and g.sign_by != "device frame" and abs(g.sign_evidence) < WEAK_SIGN_EVIDENCE
 
 
 def up_by_doors(mesh: Mesh, orientation: Orientation, plan_mesh: Mesh, options: RunOptions) -> Upright:

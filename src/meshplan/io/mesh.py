@@ -55,6 +55,46 @@ DECLARED_UP = {
     **{ext.lstrip("."): (0.0, 1.0, 0.0) for ext in (".usd", ".usda", ".usdc", ".usdz")},
 }
 
+#: Bytes read from the start of an OBJ file to recognise a HoloLens Device Portal export.
+_SNIFF_BYTES = 4096
+
+#: The lines a HoloLens Device Portal export (Windows Device Portal, 3D View, "Save" of the
+#: spatial mapping mesh) is made of: one ``o Object.<n>`` per surface, then its ``v``, ``vn``
+#: and ``f`` lines, blank lines between the surfaces; no comment, material or group line.
+_DEVICE_PORTAL_LINES = (b"v ", b"vn ", b"f ", b"o Object.")
+
+
+def device_frame_up(path: Path, file_type: str) -> tuple[float, float, float] | None:
+    """The up of the device frame a scan file was written in, where its writer is known to
+    write one: ``(0, 1, 0)`` for a HoloLens Device Portal OBJ, else ``None``.
+
+    HoloLens spatial mapping meshes are expressed in a stationary frame of reference whose +y
+    axis the device aligns against gravity (its inertial sensors), and the Device Portal saves
+    them in it as they are. Unlike a file format's convention (:data:`DECLARED_UP`), which an
+    exporter may ignore, this up is measured: it outweighs the geometry of a scan fragment
+    with more wall than floor (``declared_by="device"`` of
+    :func:`meshplan.orient.gravity.estimate_gravity`). Recognised by the export's own layout:
+    it begins (after blank lines) with ``o Object.1``, and its first lines hold nothing but
+    ``o Object.<n>``, ``v``, ``vn`` and ``f`` statements.
+    """
+    if file_type != "obj":
+        return None
+    try:
+        with open(path, "rb") as f:
+            head = f.read(_SNIFF_BYTES)
+    except OSError:
+        return None
+    lines = head.replace(b"\r", b"").split(b"\n")
+    if len(head) == _SNIFF_BYTES:
+        lines = lines[:-1]  # the last line may be cut short
+    lines = [ln for ln in lines if ln.strip()]
+    if not lines or lines[0].rstrip() != b"o Object.1" or len(lines) < 2:
+        return None
+    if not all(ln.startswith(_DEVICE_PORTAL_LINES) for ln in lines):
+        return None
+    return (0.0, 1.0, 0.0)
+
+
 MESH_FORMATS = {".obj": "obj", ".ply": "ply", ".glb": "glb", ".gltf": "gltf", ".stl": "stl", ".off": "off"}
 
 #: Point cloud extensions (:mod:`meshplan.io.points`; E57 and LAS/LAZ need the ``points`` extra).
@@ -138,6 +178,10 @@ class LoadStats:
     #: the up direction the file's format declares (input coordinates, :data:`DECLARED_UP`;
     #: ``None`` for formats that declare none), a prior for the up search. Not in :meth:`to_dict`.
     declared_up: tuple[float, float, float] | None = None
+    #: who declares ``declared_up``: ``"format"`` (the format's convention, :data:`DECLARED_UP`)
+    #: or ``"device"`` (the gravity-aligned frame the capturing device wrote the mesh in,
+    #: :func:`device_frame_up`). Not in :meth:`to_dict`.
+    declared_by: str = "format"
 
     @property
     def dropped_faces(self) -> int:
@@ -145,7 +189,7 @@ class LoadStats:
 
     def to_dict(self) -> dict:
         d = asdict(self)
-        del d["parametric"], d["declared_up"]
+        del d["parametric"], d["declared_up"], d["declared_by"]
         d["dropped_faces"] = self.dropped_faces
         if not self.points_read:  # a mesh: plan.json as before
             for key in ("points_read", "points", "dropped_nonfinite_points"):
@@ -711,6 +755,14 @@ def clean_mesh(vertices: np.ndarray, faces: np.ndarray) -> tuple[Mesh, dict[str,
     return Mesh(uniq[used], remap[faces])._seed(triangles=tri, _cross=cross), counts
 
 
+def _declared(path: Path, file_type: str) -> tuple[tuple[float, float, float] | None, str]:
+    """``declared_up`` and ``declared_by`` of :class:`LoadStats` for a mesh file."""
+    device = device_frame_up(path, file_type)
+    if device is not None:
+        return device, "device"
+    return DECLARED_UP.get(file_type), "format"
+
+
 def load_mesh(
     path: str | os.PathLike, units: str = "m", max_faces: int | None = None, point_voxel_m: float | None = None, units_explicit: bool | None = None
 ) -> LoadedMesh:
@@ -768,6 +820,7 @@ def load_mesh(
     if faces.size and (faces.min() < 0 or faces.max() >= n_v):
         raise InputError(f"{p}: faces refer to vertices that do not exist", "export the scan again")
     mesh, counts = clean_mesh(vertices * scale, faces)
+    declared_up, declared_by = _declared(p, file_type)
     stats = LoadStats(
         path=str(p),
         format=file_type,
@@ -780,7 +833,8 @@ def load_mesh(
         faces=mesh.n_faces,
         **counts,
         parametric=parametric,
-        declared_up=DECLARED_UP.get(file_type),
+        declared_up=declared_up,
+        declared_by=declared_by,
     )
     if mesh.n_faces == 0:
         raise InputError(

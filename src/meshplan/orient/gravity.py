@@ -38,13 +38,16 @@ Decided against, measured on the 16 real scans (2026-12):
 * *A prior from the file format* was first rejected, then adopted (issue 9) as a tie-breaker
   only: see ``declared_up`` of :func:`estimate_gravity`. glTF defines +y as up (and a USD stage
   its ``upAxis``, turned +y on reading); OBJ, PLY, STL and OFF define nothing, so for them the
-  answer stays independent of how the file is turned.
+  answer stays independent of how the file is turned, except for a file whose writer is known
+  to use a gravity-aligned device frame (a HoloLens Device Portal OBJ, recognised by its
+  layout): that up is a measurement, taken whenever a floor lies along it.
 * *Objects ending on the floor* (the lower ends of vertical surfaces at one common level): the
   share of plan cells whose vertical surfaces end at the lowest main level does not separate the
   true axis from a wall's on the tatami room (0.39 against 0.47): furniture stands against walls
   as well as on floors, and floor, ceiling and side walls all end at a wall.
 * *The desk fragment* (4.6 m2 of wall, 0.4 m2 of floor): the wall axis outscores the floor's four
-  times on every cue; given the axis, up is 0.7 degrees off. Not reachable from its geometry.
+  times on every cue; given the axis, up is 0.7 degrees off. Not reachable from its geometry
+  alone; its Device Portal frame gives the axis (``DEVICE_PRIOR_SHARE``).
 
 Why one long module: the up search is a chain of cues over the same candidate axes (areas,
 levels, corridor rule, enclosure, sign evidence, slab refinement), each documented where it is
@@ -127,6 +130,20 @@ _NORMALS_ERROR_DEG = 0.4
 #: convention). Measured: the tatami room's floor axis scores 0.86 of a wall pair's; on the real
 #: scans the wrong axes score at most 0.87 of the true one, so no OBJ/PLY decision is near this.
 FORMAT_PRIOR_SHARE = 0.5
+
+#: The same share for the up of a device's gravity-aligned frame (a HoloLens Device Portal
+#: export: :func:`meshplan.io.mesh.device_frame_up`): none. That up was measured by the device's
+#: inertial sensors when it scanned, so the geometry need only show a floor along it (the
+#: declared axis among the candidates, which already hold 5 % of the heaviest axis' area); a
+#: fragment with more wall than floor outscores it otherwise (the desk fragment: 0.26 of a
+#: wall's score).
+DEVICE_PRIOR_SHARE = 0.0
+
+#: The share of the best score the declared up must reach, by who declares it.
+PRIOR_SHARE = {"format": FORMAT_PRIOR_SHARE, "device": DEVICE_PRIOR_SHARE}
+
+#: What :attr:`GravityEstimate.sign_by` says when the declared up decided, by who declares it.
+_PRIOR_SIGN_BY = {"format": "file axes", "device": "device frame"}
 
 #: Largest angle (degrees) between a candidate axis and the declared up for the candidate to be
 #: the declared one: a scan's floor lies within a degree or two of its file's up when the file
@@ -388,7 +405,7 @@ def _bbox_axis(mesh: Mesh) -> FloatArray:
 
 
 def estimate_gravity(
-    mesh: Mesh, params: OrientParams, up_hint: FloatArray | None = None, declared_up: FloatArray | None = None
+    mesh: Mesh, params: OrientParams, up_hint: FloatArray | None = None, declared_up: FloatArray | None = None, declared_by: str = "format"
 ) -> GravityEstimate:
     """The up direction of ``mesh`` in its own coordinates.
 
@@ -397,6 +414,8 @@ def estimate_gravity(
     (:data:`meshplan.io.mesh.DECLARED_UP`: glTF's +y), a prior, not a fact: it is taken only
     among the candidates the geometry cannot separate (within :data:`FORMAT_PRIOR_SHARE` of the
     best score, :data:`FORMAT_PRIOR_CONE_DEG` of the declared axis), and then gives the sign too.
+    ``declared_by`` ``"device"`` marks the up of a device's gravity-aligned frame instead
+    (:data:`DEVICE_PRIOR_SHARE`: taken whenever the geometry shows a floor along it).
 
     Raises
     ------
@@ -429,14 +448,14 @@ def estimate_gravity(
         if declared is not None:
             # the format's up among candidates the geometry cannot separate (FORMAT_PRIOR_SHARE)
             near = [c for c in candidates if abs(c.axis @ declared) >= np.cos(np.radians(FORMAT_PRIOR_CONE_DEG))]
-            if near and near[0].score >= FORMAT_PRIOR_SHARE * best.score:
+            if near and near[0].score >= PRIOR_SHARE[declared_by] * best.score:
                 best = near[0]
-                sign_by = "file axes"  # the file format's declared up
+                sign_by = _PRIOR_SIGN_BY[declared_by]  # the format's (or the device's) declared up
         # the k-means refinement ignores the sign; decide it on the refined axis, whose levels
         # are sharp (a rough axis a few degrees off smears them)
         axis, used = _refine_kmeans(normals, areas, best.axis, params.gravity_cones_deg)
         evidence = sign_evidence(centroids, normals, areas, axis, params)
-        if declared is not None and sign_by == "file axes":
+        if declared is not None and sign_by == _PRIOR_SIGN_BY[declared_by]:
             # the format declares the sign too; the evidence only measures how sure it is
             rough = axis if axis @ declared >= 0 else -axis
             evidence = float(evidence if axis @ declared >= 0 else -evidence)

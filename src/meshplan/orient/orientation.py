@@ -92,7 +92,9 @@ def _check_floor(normals: FloatArray, heights: FloatArray, areas: FloatArray, fl
         )
 
 
-def orient(mesh: Mesh, params: OrientParams | None = None, up_hint: FloatArray | None = None, declared_up: FloatArray | None = None) -> Orientation:
+def orient(
+    mesh: Mesh, params: OrientParams | None = None, up_hint: FloatArray | None = None, declared_up: FloatArray | None = None, declared_by: str = "format"
+) -> Orientation:
     """Level the mesh, find its floors, ceilings and stories, and turn its walls onto the axes.
 
     Parameters
@@ -108,6 +110,9 @@ def orient(mesh: Mesh, params: OrientParams | None = None, up_hint: FloatArray |
     declared_up
         The up direction the file's format declares (input coordinates; glTF: +y), a prior
         where the geometry cannot decide (:func:`meshplan.orient.gravity.estimate_gravity`).
+    declared_by
+        ``"format"`` (a file format's convention) or ``"device"`` (the gravity-aligned frame of
+        the capturing device, a stronger prior): see ``estimate_gravity``.
 
     Raises
     ------
@@ -115,13 +120,13 @@ def orient(mesh: Mesh, params: OrientParams | None = None, up_hint: FloatArray |
         No floor, no walls, or an implausible scale.
     """
     with few_blas_threads():  # its products are thin (geometry.BLAS_THREADS)
-        return _orient(mesh, params or OrientParams(), up_hint, declared_up)
+        return _orient(mesh, params or OrientParams(), up_hint, declared_up, declared_by)
 
 
-def _orient(mesh: Mesh, params: OrientParams, up_hint: FloatArray | None, declared_up: FloatArray | None) -> Orientation:
+def _orient(mesh: Mesh, params: OrientParams, up_hint: FloatArray | None, declared_up: FloatArray | None, declared_by: str = "format") -> Orientation:
     """:func:`orient` itself, with its parameters given."""
     _check_scale(mesh, params)
-    gravity = estimate_gravity(mesh, params, up_hint, declared_up)
+    gravity = estimate_gravity(mesh, params, up_hint, declared_up, declared_by)
     areas = mesh.face_areas
 
     def level(up):
