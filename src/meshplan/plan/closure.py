@@ -195,6 +195,66 @@ def straighten(piece: Polygon, others, fit_m: float, smooth_m: float) -> Polygon
     return best
 
 
+#: Shortest stretch (m) of a wall that a room must come near for the room to be carried up to
+#: it: a jamb, a pillar or a wall's corner piece seen beside the room is no side of it.
+MIN_REACH_SPAN_M = 0.5
+
+#: How far (m) inside the band next to a wall another wall line may pass without stopping the
+#: room from being carried across it: the rounding of lines that meet at the wall.
+REACH_CROSSING_M = 0.01
+
+
+def reach_walls(shape: Polygon, walls: list[LineString], normals: FloatArray, beyond, reach_m: float) -> Polygon:
+    """``shape`` (a room the scanned floor closes) carried up to every scanned wall in ``walls``
+    that it stops short of by at most ``reach_m``.
+
+    Furniture stands along walls and hides the floor under it, so a room closed by its floor
+    ends that far inside a wall that was scanned; the room is the floor up to the wall. For each
+    wall, the band between the wall and ``reach_m`` inside it, over the stretch of the wall the
+    room comes within ``reach_m`` of, joins the room, less ``beyond`` (the other rooms). A band
+    that another wall
+    line crosses (a partition between the room and the wall) is left out, as is a stretch
+    shorter than :data:`MIN_REACH_SPAN_M`. A wall face is reached only from its front, the side
+    its normal (``normals``, ``(W, 2)``: into the room it was scanned from) points to: the
+    face of a wall seen from the next room lies behind the wall's thickness, and a room whose
+    own face of that wall was not scanned stops where its floor does, at that face.
+    """
+    if reach_m <= 0 or not walls:
+        return shape
+    grown = shape
+    centre = np.asarray(shape.representative_point().coords[0])
+    for k, wall in enumerate(walls):
+        a, b = np.asarray(wall.coords[0], float), np.asarray(wall.coords[-1], float)
+        length = float(np.hypot(*(b - a)))
+        if length < MIN_REACH_SPAN_M:
+            continue
+        t = (b - a) / length
+        n = np.asarray(normals[k], float)
+        if (centre - a) @ n <= 0:  # the room lies behind the face
+            continue
+        inward = n * reach_m
+        band = Polygon([a, b, b + inward, a + inward])
+        near = shape.intersection(band)
+        if near.is_empty or near.area <= 0:
+            continue
+        u = (np.asarray(shapely.get_coordinates(near)) - a) @ t
+        u0, u1 = max(0.0, float(u.min())), min(length, float(u.max()))
+        if u1 - u0 < MIN_REACH_SPAN_M:
+            continue
+        p0, p1 = a + u0 * t, a + u1 * t
+        fill = Polygon([p0, p1, p1 + inward, p0 + inward])
+        core = fill.buffer(-REACH_CROSSING_M, join_style="mitre")
+        if any(j != k and other.intersects(core) for j, other in enumerate(walls)):
+            continue
+        if beyond is not None and not beyond.is_empty:
+            fill = fill.difference(beyond)
+        grown = grown.union(fill)
+    parts = [p for p in shapely.get_parts(grown) if isinstance(p, Polygon) and p.area > 0]
+    if not parts:
+        return shape
+    return Polygon(max(parts, key=lambda p: p.intersection(shape).area).exterior)
+
+
 def smooth(piece: Polygon, radius: float) -> Polygon:
     """``piece`` without the notches and spikes narrower than ``2 * radius`` (a closing, then
     an opening, with a square: the ragged fringe of a scanned floor goes, its straight runs

@@ -73,6 +73,10 @@ class PlanParams:
     collinear_wall_m
         Two parallel wall pieces whose lines are this close across are one wall (plaster, scan
         noise; less than a partition's thickness).
+    wall_reach_m
+        A room that the scanned floor closes is carried up to a scanned wall it stops short of
+        by at most this much: the depth of the furniture that stands against walls and hides
+        the floor under it (desks 0.7-0.8 m, kitchen counters and wardrobes 0.6 m).
     open_room_fit_m
         A room that the scanned floor closes becomes its bounding rectangle along the walls
         when the rectangle's outline lies within this distance of the floor's (the depth of
@@ -138,6 +142,7 @@ class PlanParams:
         "collinear_wall_m": _GAP,
         "room_mouth_m": _GAP,
         "open_room_fit_m": _GAP,
+        "wall_reach_m": _GAP,
         "min_fragment_area_m2": Real(0.0, MAX_LENGTH_M**2, why="larger than any building"),
         "min_room_area_m2": Real(0.0, MAX_LENGTH_M**2, why="larger than any building"),
         "min_room_width_m": _LENGTH,
@@ -170,6 +175,7 @@ class PlanParams:
     collinear_wall_m: float = 0.1
     room_mouth_m: float = 2.5
     open_room_fit_m: float = 0.3
+    wall_reach_m: float = 0.8
     min_fragment_area_m2: float = 1.5
     min_room_area_m2: float = 1.0
     min_room_width_m: float = 0.5

@@ -33,6 +33,7 @@ classification of its faces are one algorithm whose steps share the story's wall
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -44,7 +45,7 @@ from ..geometry import FloatArray, Mesh
 from ..orient import Orientation, Story, slab_faces
 from ..units import FOOT_M
 from ..walls import FlatWalls
-from .closure import MIN_MEETING_ANGLE_DEG, NODE_OVERSHOOT_M, close_walls, end_crossings, run_to_boundary, straighten
+from .closure import MIN_MEETING_ANGLE_DEG, NODE_OVERSHOOT_M, close_walls, end_crossings, reach_walls, run_to_boundary, straighten
 from .params import PlanParams
 
 #: Where the scanned floor closes a room, its outline loses notches and spikes narrower than
@@ -418,13 +419,22 @@ def story_rooms(mesh: Mesh, orientation: Orientation, walls: FlatWalls, story: S
             for piece in _parts(part.intersection(tight), params):
                 if enclosed or _classify(piece, raster, None, None, params) is not None:
                     open_parts.append(Polygon(piece.exterior))
-    return _open_rooms(open_parts, closed, faces, params)
+    return _open_rooms(open_parts, closed, faces, params, scanned, walls.normal[index])
 
 
-def _open_rooms(parts: list[Polygon], closed: list[tuple[Polygon, str]], faces, params: PlanParams) -> list[tuple[Polygon, str]]:
+def _open_rooms(
+    parts: list[Polygon],
+    closed: list[tuple[Polygon, str]],
+    faces,
+    params: PlanParams,
+    scanned: Sequence[LineString] = (),
+    scanned_normals: FloatArray | None = None,
+) -> list[tuple[Polygon, str]]:
     """The rooms that the scanned floor closes: straightened (:func:`straighten`) where the
-    floor fills most of their rectangle, and without fragments (pieces smaller than
-    ``min_fragment_area_m2`` are merged into a room they touch, or dropped)."""
+    floor fills most of their rectangle, carried up to the scanned walls (``scanned``, with the
+    normals of their faces ``scanned_normals``) they stop short of by at most ``wall_reach_m``
+    (:func:`reach_walls`), and without fragments (pieces
+    smaller than ``min_fragment_area_m2`` are merged into a room they touch, or dropped)."""
     out: list[tuple[Polygon, str]] = []
     rooms = [p for p, _ in closed]
     small = [p for p in parts if p.area < params.min_fragment_area_m2]
@@ -434,6 +444,11 @@ def _open_rooms(parts: list[Polygon], closed: list[tuple[Polygon, str]], faces, 
         others = [f for f in faces if f.area > 0 and not f.buffer(-INSIDE_M).intersects(piece.representative_point())]
         beyond = shapely.union_all([f.buffer(-SLIT_M, join_style="mitre") for f in others] + rooms) if others or rooms else None
         shape = straighten(piece, beyond, params.open_room_fit_m, FLOOR_FRINGE_M)
+        # up to the walls, but not into another room (the faces beyond a wall the band
+        # reaches are the band itself, between the floor's outline and the wall)
+        if scanned_normals is not None:
+            taken = shapely.union_all(rooms) if rooms else None
+            shape = reach_walls(shape, list(scanned), scanned_normals, taken, params.wall_reach_m)
         rooms.append(shape)
         out.append((shapely.orient_polygons(shape, exterior_cw=True), "floor"))
     # a fragment joins the room it shares the most boundary with (a slit's width away)
