@@ -205,8 +205,9 @@ REACH_CROSSING_M = 0.01
 
 
 def reach_walls(shape: Polygon, walls: list[LineString], normals: FloatArray, beyond, reach_m: float) -> Polygon:
-    """``shape`` (a room the scanned floor closes) carried up to every scanned wall in ``walls``
-    that it stops short of by at most ``reach_m``.
+    """``shape`` (a room the scanned floor closes) carried up to every wall in ``walls`` (as
+    scanned, or continued across what the scan missed) that it stops short of by at most
+    ``reach_m``.
 
     Furniture stands along walls and hides the floor under it, so a room closed by its floor
     ends that far inside a wall that was scanned; the room is the floor up to the wall. For each

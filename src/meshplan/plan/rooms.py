@@ -419,7 +419,9 @@ def story_rooms(mesh: Mesh, orientation: Orientation, walls: FlatWalls, story: S
             for piece in _parts(part.intersection(tight), params):
                 if enclosed or _classify(piece, raster, None, None, params) is not None:
                     open_parts.append(Polygon(piece.exterior))
-    return _open_rooms(open_parts, closed, faces, params, scanned, walls.normal[index])
+    # the rooms are carried up to the walls as closed (scanned, or continued where the scan
+    # missed a piece): the lines that bound the arrangement's faces
+    return _open_rooms(open_parts, closed, faces, params, segments(u_lo, u_hi), walls.normal[index])
 
 
 def _open_rooms(
@@ -427,12 +429,12 @@ def _open_rooms(
     closed: list[tuple[Polygon, str]],
     faces,
     params: PlanParams,
-    scanned: Sequence[LineString] = (),
-    scanned_normals: FloatArray | None = None,
+    wall_lines: Sequence[LineString] = (),
+    wall_normals: FloatArray | None = None,
 ) -> list[tuple[Polygon, str]]:
     """The rooms that the scanned floor closes: straightened (:func:`straighten`) where the
-    floor fills most of their rectangle, carried up to the scanned walls (``scanned``, with the
-    normals of their faces ``scanned_normals``) they stop short of by at most ``wall_reach_m``
+    floor fills most of their rectangle, carried up to the walls (``wall_lines``, with the
+    normals of their faces ``wall_normals``) they stop short of by at most ``wall_reach_m``
     (:func:`reach_walls`), and without fragments (pieces
     smaller than ``min_fragment_area_m2`` are merged into a room they touch, or dropped)."""
     out: list[tuple[Polygon, str]] = []
@@ -446,9 +448,9 @@ def _open_rooms(
         shape = straighten(piece, beyond, params.open_room_fit_m, FLOOR_FRINGE_M)
         # up to the walls, but not into another room (the faces beyond a wall the band
         # reaches are the band itself, between the floor's outline and the wall)
-        if scanned_normals is not None:
+        if wall_normals is not None:
             taken = shapely.union_all(rooms) if rooms else None
-            shape = reach_walls(shape, list(scanned), scanned_normals, taken, params.wall_reach_m)
+            shape = reach_walls(shape, list(wall_lines), wall_normals, taken, params.wall_reach_m)
         rooms.append(shape)
         out.append((shapely.orient_polygons(shape, exterior_cw=True), "floor"))
     # a fragment joins the room it shares the most boundary with (a slit's width away)
