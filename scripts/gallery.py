@@ -289,7 +289,8 @@ def write_summary(out: Path, results: list[dict], skipped: list[dict]) -> str:
         "",
         (
             "Scored against `../shared/truth` (truth README rules: walls within 15 cm and 10 degrees, rooms one-to-one at IoU >= 0.5, "
-            "openings within 40 cm). Gravity: angle between the plan's up and the truth's (or, without truth, MANIFEST.md's). "
+            "openings within 40 cm). Gravity: angle between the plan's up and the truth's "
+            "(or, without truth, the truth README's levelling of the scan from MANIFEST.md's up). "
             "Floor/ceiling: plan minus truth at the centre of the story. Time: wall-clock `meshplan run` (2 scans at once)."
         ),
         "",
@@ -324,8 +325,13 @@ def score_and_draw(scan: Path, res: dict, out: Path, truth_dir: Path, ups: dict[
             up = np.asarray(truth["truth_to_input"], float)[:3, :3] @ [0.0, 1.0, 0.0]
             res["gravity_ref"] = "truth"
         elif scan.name in ups:
-            up = ups[scan.name]
-            res["gravity_ref"] = "manifest"
+            # no truth: the truth's own levelling of the scan, from the manifest's up
+            from meshplan.evaluate_real import truth_levelling
+            from meshplan.io import load_mesh
+
+            mesh = load_mesh(scan).mesh
+            up = truth_levelling(mesh.face_centroids, mesh.face_normals, mesh.face_areas, ups[scan.name])
+            res["gravity_ref"] = "truth levelling"
         else:
             up = None
         res["gravity_error_deg"] = angle_deg(plan_up(plan), up) if up is not None else None

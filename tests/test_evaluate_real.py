@@ -379,3 +379,23 @@ def test_perturbing_does_not_touch_the_truth():
     shift_wall(plan, 0, 0.3)
     evaluate_real(plan, truth)
     assert truth == before
+
+
+def test_the_truth_levelling_levels_a_tilted_room_on_its_floor():
+    """The truth's levelling (its README's plane fit to the floor) finds the floor's normal of a
+    room tilted by 1.5 degrees, from the file's +y, and ignores the ceiling and a table top."""
+    from conftest import angle_deg, box_room
+
+    from meshplan.evaluate_real import truth_levelling
+    from meshplan.geometry import Mesh
+
+    v, f = box_room(4.0, 3.0, 2.5, cell=0.1)
+    table = np.array([[1.0, 0.75, 1.0], [2.0, 0.75, 1.0], [2.0, 0.75, 2.0], [1.0, 0.75, 2.0]])
+    v = np.r_[v, table]
+    f = np.r_[f, len(v) - 4 + np.array([[0, 2, 1], [0, 3, 2]])]
+    t = np.radians(1.5)
+    rot = np.array([[1.0, 0.0, 0.0], [0.0, np.cos(t), -np.sin(t)], [0.0, np.sin(t), np.cos(t)]])
+    mesh = Mesh(v @ rot.T, f)
+    up = truth_levelling(mesh.face_centroids, mesh.face_normals, mesh.face_areas, [0.0, 1.0, 0.0])
+    assert angle_deg(up, rot @ [0.0, 1.0, 0.0]) < 0.01
+    assert angle_deg(up, [0.0, 1.0, 0.0]) > 1.4

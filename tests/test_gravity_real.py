@@ -18,6 +18,7 @@ import numpy as np
 import pytest
 
 from conftest import SCANS, angle_deg, real_scan
+from meshplan.evaluate_real import truth_levelling as _truth_levelling
 from meshplan.io import load_mesh
 from meshplan.io.mesh import SCAN_FORMATS
 from meshplan.orient import orient
@@ -57,32 +58,9 @@ TRUE_UP = {
 #: degrees off the device's +y, as its sibling's truth lies 1.3 off; meshplan's up is 0.4 from it).
 KNOWN_WRONG: dict[str, str] = {}
 
-#: The truth's levelling (../shared/truth/README.md): faces within this angle (degrees) of up
-#: are horizontal, those within this distance (m) of the lowest strong level are the floor,
-#: and the fit is repeated this many times.
-_LEVEL_CONE_DEG, _LEVEL_BAND_M, _LEVEL_ROUNDS = 10.0, 0.1, 3
-#: Its height histogram: 2 cm bins; a level is strong above this share of the largest bin.
-_LEVEL_BIN_M, _LEVEL_STRONG = 0.02, 0.2
-
-
 def truth_levelling(mesh, up) -> np.ndarray:
-    """Up as the truth's README levels a scan: from ``up`` (the file's +y, or the manifest's up),
-    the normal of an area-weighted plane fit to the floor faces (normal within 10 degrees of up,
-    within 10 cm of the lowest strong peak of the height histogram of horizontal faces), three
-    times."""
-    c, n, a = mesh.face_centroids, mesh.face_normals, mesh.face_areas
-    up = np.asarray(up, float) / np.linalg.norm(up)
-    for _ in range(_LEVEL_ROUNDS):
-        h = c @ up
-        horizontal = np.abs(n @ up) > np.cos(np.radians(_LEVEL_CONE_DEG))
-        hist, edges = np.histogram(h[horizontal], bins=np.arange(h.min(), h.max() + _LEVEL_BIN_M, _LEVEL_BIN_M), weights=a[horizontal])
-        lowest = edges[np.flatnonzero(hist > _LEVEL_STRONG * hist.max())[0]]
-        floor = horizontal & (np.abs(h - lowest) < _LEVEL_BAND_M)
-        p, w = c[floor], a[floor]
-        d = p - (w[:, None] * p).sum(axis=0) / w.sum()
-        normal = np.linalg.eigh((d * w[:, None]).T @ d)[1][:, 0]
-        up = normal * np.sign(normal @ up)
-    return up
+    """:func:`meshplan.evaluate_real.truth_levelling` of ``mesh`` from ``up``."""
+    return _truth_levelling(mesh.face_centroids, mesh.face_normals, mesh.face_areas, up)
 
 
 def _truth_file(name: str):

@@ -73,6 +73,42 @@ _EPS_M = 1e-9
 _HINT = "give a plan.json written by meshplan run and a <scan>.truth.json"
 
 
+#: The truth's levelling (its README): faces within this angle (degrees) of up are horizontal,
+#: those within this distance (m) of the lowest strong level are the floor, and the plane fit
+#: is repeated this many times; the height histogram has bins of this size (m), and a level
+#: is strong above this share of its largest bin.
+LEVEL_CONE_DEG, LEVEL_BAND_M, LEVEL_ROUNDS, LEVEL_BIN_M, LEVEL_STRONG = 10.0, 0.1, 3, 0.02, 0.2
+
+
+def truth_levelling(centroids: np.ndarray, normals: np.ndarray, areas: np.ndarray, up: Any) -> np.ndarray:
+    """Up as the truth files level a scan (their README: "up starts as the file's +y and is
+    refined by an area-weighted plane fit to the floor faces (normal within 10 degrees of up,
+    within 10 cm of the lowest strong peak of the height histogram of horizontal faces), three
+    iterations"), from ``up`` (input coordinates), for the faces' ``centroids``, ``normals``
+    and ``areas``.
+
+    The reference up of a scan that has no truth file, measured the way the truth measures it:
+    where a scan's floor lies off its device's up (a Tango room's by 1.3-1.7 degrees), the
+    truth's up follows the floor, and so does meshplan's.
+    """
+    c, n, a = (np.asarray(v, dtype=np.float64) for v in (centroids, normals, areas))
+    up = np.asarray(up, dtype=np.float64) / np.linalg.norm(up)
+    for _ in range(LEVEL_ROUNDS):
+        h = c @ up
+        horizontal = np.abs(n @ up) > np.cos(np.radians(LEVEL_CONE_DEG))
+        if not horizontal.any():
+            break
+        bins = np.arange(h[horizontal].min(), h[horizontal].max() + 2 * LEVEL_BIN_M, LEVEL_BIN_M)
+        hist, edges = np.histogram(h[horizontal], bins=bins, weights=a[horizontal])
+        lowest = edges[np.flatnonzero(hist > LEVEL_STRONG * hist.max())[0]]
+        floor = horizontal & (np.abs(h - lowest) < LEVEL_BAND_M)
+        p, w = c[floor], a[floor]
+        d = p - (w[:, None] * p).sum(axis=0) / w.sum()
+        normal = np.linalg.eigh((d * w[:, None]).T @ d)[1][:, 0]
+        up = normal * np.sign(normal @ up)
+    return up
+
+
 def is_real_truth(truth: Any) -> bool:
     """Whether ``truth`` is a real-scan truth file (it has ``truth_to_input``)."""
     return isinstance(truth, dict) and "truth_to_input" in truth
