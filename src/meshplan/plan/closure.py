@@ -213,9 +213,8 @@ def reach_walls(shape: Polygon, walls: list[LineString], normals: FloatArray, be
     ends that far inside a wall that was scanned; the room is the floor up to the wall. For each
     wall, the band between the wall and ``reach_m`` inside it, over the stretch of the wall the
     room comes within ``reach_m`` of, joins the room, less ``beyond`` (the other rooms). A band
-    that another wall
-    line crosses (a partition between the room and the wall) is left out, as is a stretch
-    shorter than :data:`MIN_REACH_SPAN_M`. A wall face is reached only from its front, the side
+    that another wall line crosses (a partition between the room and the wall) is left out, as
+    is a stretch shorter than :data:`MIN_REACH_SPAN_M`. A wall face is reached only from its front, the side
     its normal (``normals``, ``(W, 2)``: into the room it was scanned from) points to: the
     face of a wall seen from the next room lies behind the wall's thickness, and a room whose
     own face of that wall was not scanned stops where its floor does, at that face.
@@ -224,6 +223,7 @@ def reach_walls(shape: Polygon, walls: list[LineString], normals: FloatArray, be
         return shape
     grown = shape
     centre = np.asarray(shape.representative_point().coords[0])
+    tree = shapely.STRtree(walls)  # the walls that may cross a band, from one tree
     for k, wall in enumerate(walls):
         a, b = np.asarray(wall.coords[0], float), np.asarray(wall.coords[-1], float)
         length = float(np.hypot(*(b - a)))
@@ -245,7 +245,7 @@ def reach_walls(shape: Polygon, walls: list[LineString], normals: FloatArray, be
         p0, p1 = a + u0 * t, a + u1 * t
         fill = Polygon([p0, p1, p1 + inward, p0 + inward])
         core = fill.buffer(-REACH_CROSSING_M, join_style="mitre")
-        if any(j != k and other.intersects(core) for j, other in enumerate(walls)):
+        if any(j != k for j in tree.query(core, predicate="intersects")):
             continue
         if beyond is not None and not beyond.is_empty:
             fill = fill.difference(beyond)

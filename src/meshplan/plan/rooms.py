@@ -435,8 +435,8 @@ def _open_rooms(
     """The rooms that the scanned floor closes: straightened (:func:`straighten`) where the
     floor fills most of their rectangle, carried up to the walls (``wall_lines``, with the
     normals of their faces ``wall_normals``) they stop short of by at most ``wall_reach_m``
-    (:func:`reach_walls`), and without fragments (pieces
-    smaller than ``min_fragment_area_m2`` are merged into a room they touch, or dropped)."""
+    (:func:`reach_walls`), and without fragments (pieces smaller than ``min_fragment_area_m2``
+    are merged into a room they touch, or dropped)."""
     out: list[tuple[Polygon, str]] = []
     rooms = [p for p, _ in closed]
     small = [p for p in parts if p.area < params.min_fragment_area_m2]
