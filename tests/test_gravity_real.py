@@ -67,26 +67,26 @@ def _truth_file(name: str):
     return SCANS.parent / "truth" / f"{name.rsplit('.', 1)[0]}.truth.json"
 
 
-def _true_up(name: str) -> np.ndarray:
+def _true_up(name: str, mesh) -> np.ndarray:
     """The truth's up in input coordinates where the scan has a truth, else the up the truth's
-    levelling gives (:func:`truth_levelling`, from the manifest's up)."""
+    levelling gives of ``mesh``, the scan (:func:`truth_levelling`, from the manifest's up)."""
     truth = _truth_file(name)
     if truth.is_file():
         m = np.asarray(json.loads(truth.read_text())["truth_to_input"], float)
         return m[:3, :3] @ np.array([0.0, 1.0, 0.0])
-    return truth_levelling(load_mesh(real_scan(name)).mesh, TRUE_UP[name])
+    return truth_levelling(mesh, TRUE_UP[name])
 
 
 def test_the_truth_levelling_is_reproduced():
     """:func:`truth_levelling` gives the up of every truth file within 0.1 degrees (from the
-    manifest's up), so that it can stand in for the truth on the scans that have none; on the
-    Tango room it lies 1.3 degrees off the device's +y, as the truth does."""
+    manifest's up), so that it can stand in for the truth on the scans that have none."""
     if not SCANS.is_dir():
         pytest.skip("../shared/scans not available")
     checked = 0
     for name, manifest_up in TRUE_UP.items():
         if _truth_file(name).is_file() and (SCANS / name).is_file():
-            error = angle_deg(truth_levelling(load_mesh(SCANS / name).mesh, manifest_up), _true_up(name))
+            mesh = load_mesh(SCANS / name).mesh
+            error = angle_deg(truth_levelling(mesh, manifest_up), _true_up(name, mesh))
             assert error < 0.1, f"{name}: {error:.2f} degrees"
             checked += 1
     assert checked >= 10
@@ -108,7 +108,7 @@ def test_up_within_a_degree(name):
     loaded = load_mesh(real_scan(name))
     # row 1 of the rotation: up in input coordinates (with the up the file's format declares)
     up_found = orient(loaded.mesh, declared_up=loaded.stats.declared_up, declared_by=loaded.stats.declared_by).transform[1, :3]
-    error = angle_deg(up_found, _true_up(name))
+    error = angle_deg(up_found, _true_up(name, loaded.mesh))
     assert error < MAX_ERROR_DEG, f"up {np.round(up_found, 3).tolist()} is {error:.2f} degrees off"
 
 
@@ -119,9 +119,9 @@ def test_a_gltf_file_gets_its_declared_up_when_the_geometry_cannot_decide():
     name = "iphone_polycam_tamatebox_tatami_room.glb"
     loaded = load_mesh(real_scan(name))
     assert loaded.stats.declared_up is not None
-    assert angle_deg(orient(loaded.mesh, declared_up=loaded.stats.declared_up).transform[1, :3], _true_up(name)) < MAX_ERROR_DEG
+    assert angle_deg(orient(loaded.mesh, declared_up=loaded.stats.declared_up).transform[1, :3], _true_up(name, loaded.mesh)) < MAX_ERROR_DEG
     # without the format's word the wall pair wins: the prior is what decides
-    assert angle_deg(orient(loaded.mesh).transform[1, :3], _true_up(name)) > 45
+    assert angle_deg(orient(loaded.mesh).transform[1, :3], _true_up(name, loaded.mesh)) > 45
 
 
 #: The HoloLens 1 Device Portal exports among the scans (MANIFEST.md: "Device-Portal export").
@@ -142,4 +142,4 @@ def test_hololens_device_portal_exports_are_read_in_their_device_frame():
     loaded = load_mesh(real_scan("hl1_dangwalsh_desk_fragment.obj"))
     o = orient(loaded.mesh, declared_up=loaded.stats.declared_up, declared_by=loaded.stats.declared_by)
     assert o.gravity.sign_by == "device frame"
-    assert angle_deg(orient(loaded.mesh).transform[1, :3], _true_up("hl1_dangwalsh_desk_fragment.obj")) > 45
+    assert angle_deg(orient(loaded.mesh).transform[1, :3], _true_up("hl1_dangwalsh_desk_fragment.obj", loaded.mesh)) > 45

@@ -334,6 +334,10 @@ def test_a_room_is_not_carried_through_a_wall_or_into_another_room():
     # another room in the band takes its part of it
     other = shapely.box(3.0, 2.6, 4.0, 3.0)
     assert _reach(floor, wall, (0.0, -1.0), beyond=other).area == pytest.approx(12.0 - 0.4, abs=1e-6)
+    # a floor that runs 20 cm past the line of a wall whose face looks away from the room (the
+    # far face of its wall) is not carried on beyond it
+    crossing = shapely.box(0.0, 0.0, 4.0, 3.2)
+    assert _reach(crossing, wall, (0.0, 1.0)).area == pytest.approx(crossing.area)
     # a wall farther than wall_reach_m
     far = [(0.0, 3.5), (4.0, 3.5)]
     assert _reach(floor, far, (0.0, -1.0)).area == pytest.approx(floor.area)

@@ -17,6 +17,7 @@ from .errors import MeshplanError
 from .geometry import Mesh
 from .options import RunOptions
 from .orient import Orientation, orient
+from .orient.gravity import PRIOR_SIGN_BY
 from .plan import Openings, find_openings
 from .walls import FlatWalls, find_flat_walls, physical_walls
 
@@ -57,7 +58,7 @@ def up_in_doubt(orientation: Orientation, options: RunOptions) -> bool:
     by k-means, not from the device's gravity-aligned frame (which measured the sign too), and
     the furniture's evidence is weaker than :data:`WEAK_SIGN_EVIDENCE`."""
     g = orientation.gravity
-    return options.orient.up == "auto" and g.method == "kmeans" and g.sign_by != "device frame" and abs(g.sign_evidence) < WEAK_SIGN_EVIDENCE
+    return options.orient.up == "auto" and g.method == "kmeans" and g.sign_by != PRIOR_SIGN_BY["device"] and abs(g.sign_evidence) < WEAK_SIGN_EVIDENCE
 
 
 def up_by_doors(mesh: Mesh, orientation: Orientation, plan_mesh: Mesh, options: RunOptions) -> Upright:

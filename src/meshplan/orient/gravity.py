@@ -143,7 +143,7 @@ DEVICE_PRIOR_SHARE = 0.0
 PRIOR_SHARE = {"format": FORMAT_PRIOR_SHARE, "device": DEVICE_PRIOR_SHARE}
 
 #: What :attr:`GravityEstimate.sign_by` says when the declared up decided, by who declares it.
-_PRIOR_SIGN_BY = {"format": "file axes", "device": "device frame"}
+PRIOR_SIGN_BY = {"format": "file axes", "device": "device frame"}
 
 #: Largest angle (degrees) between a candidate axis and the declared up for the candidate to be
 #: the declared one: a scan's floor lies within a degree or two of its file's up when the file
@@ -450,12 +450,12 @@ def estimate_gravity(
             near = [c for c in candidates if abs(c.axis @ declared) >= np.cos(np.radians(FORMAT_PRIOR_CONE_DEG))]
             if near and near[0].score >= PRIOR_SHARE[declared_by] * best.score:
                 best = near[0]
-                sign_by = _PRIOR_SIGN_BY[declared_by]  # the format's (or the device's) declared up
+                sign_by = PRIOR_SIGN_BY[declared_by]  # the format's (or the device's) declared up
         # the k-means refinement ignores the sign; decide it on the refined axis, whose levels
         # are sharp (a rough axis a few degrees off smears them)
         axis, used = _refine_kmeans(normals, areas, best.axis, params.gravity_cones_deg)
         evidence = sign_evidence(centroids, normals, areas, axis, params)
-        if declared is not None and sign_by == _PRIOR_SIGN_BY[declared_by]:
+        if declared is not None and sign_by == PRIOR_SIGN_BY[declared_by]:
             # the format declares the sign too; the evidence only measures how sure it is
             rough = axis if axis @ declared >= 0 else -axis
             evidence = float(evidence if axis @ declared >= 0 else -evidence)

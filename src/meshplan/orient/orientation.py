@@ -123,7 +123,7 @@ def orient(
         return _orient(mesh, params or OrientParams(), up_hint, declared_up, declared_by)
 
 
-def _orient(mesh: Mesh, params: OrientParams, up_hint: FloatArray | None, declared_up: FloatArray | None, declared_by: str = "format") -> Orientation:
+def _orient(mesh: Mesh, params: OrientParams, up_hint: FloatArray | None, declared_up: FloatArray | None, declared_by: str) -> Orientation:
     """:func:`orient` itself, with its parameters given."""
     _check_scale(mesh, params)
     gravity = estimate_gravity(mesh, params, up_hint, declared_up, declared_by)

@@ -214,10 +214,10 @@ def reach_walls(shape: Polygon, walls: list[LineString], normals: FloatArray, be
     wall, the band between the wall and ``reach_m`` inside it, over the stretch of the wall the
     room comes within ``reach_m`` of, joins the room, less ``beyond`` (the other rooms). A band
     that another wall line crosses (a partition between the room and the wall) is left out, as
-    is a stretch shorter than :data:`MIN_REACH_SPAN_M`. A wall face is reached only from its front, the side
-    its normal (``normals``, ``(W, 2)``: into the room it was scanned from) points to: the
-    face of a wall seen from the next room lies behind the wall's thickness, and a room whose
-    own face of that wall was not scanned stops where its floor does, at that face.
+    is a stretch shorter than :data:`MIN_REACH_SPAN_M`. A wall face is reached only from its
+    front, the side its normal (``normals``, ``(W, 2)``: into the room it was scanned from)
+    points to: the face of a wall seen from the next room lies behind the wall's thickness, and
+    a room whose own face of that wall was not scanned stops where its floor does, at that face.
     """
     if reach_m <= 0 or not walls:
         return shape
@@ -231,7 +231,9 @@ def reach_walls(shape: Polygon, walls: list[LineString], normals: FloatArray, be
             continue
         t = (b - a) / length
         n = np.asarray(normals[k], float)
-        if (centre - a) @ n <= 0:  # the room lies behind the face
+        # a room behind the face whose floor crosses its line (scan noise, a fringe) would meet
+        # the band and be carried beyond its own wall
+        if (centre - a) @ n <= 0:
             continue
         inward = n * reach_m
         band = Polygon([a, b, b + inward, a + inward])

@@ -75,8 +75,9 @@ class PlanParams:
         noise; less than a partition's thickness).
     wall_reach_m
         A room that the scanned floor closes is carried up to a wall (scanned, or continued
-        across what the scan missed) it stops short of by at most this much: the depth of the furniture that stands against walls and hides
-        the floor under it (desks 0.7-0.8 m, kitchen counters and wardrobes 0.6 m).
+        across what the scan missed) it stops short of by at most this much: the depth of the
+        furniture that stands against walls and hides the floor under it (desks 0.7-0.8 m,
+        kitchen counters and wardrobes 0.6 m).
     open_room_fit_m
         A room that the scanned floor closes becomes its bounding rectangle along the walls
         when the rectangle's outline lies within this distance of the floor's (the depth of
