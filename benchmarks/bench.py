@@ -209,6 +209,19 @@ def end_to_end(
     print(f"  ({doc['input']['faces']:,} faces; pipeline total {doc['timings']['total']:.2f} s inside the process)")
 
 
+def compile_bytecode() -> None:
+    """Compile meshplan's modules to bytecode, as installing its wheel does (pip compiles every
+    module it installs). The editable install of ``make`` never does where the environment sets
+    ``PYTHONDONTWRITEBYTECODE`` (as this project's machine does): each fresh process then
+    compiled meshplan's 70 modules from source, 0.3-0.4 s of the 300k-face run (4.05-4.39 s
+    against 3.71-4.04 s, three runs each) that no installed user pays."""
+    import compileall
+
+    import meshplan
+
+    compileall.compile_dir(str(Path(meshplan.__file__).parent), quiet=1)
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="skip the 3-million-face run")
@@ -216,6 +229,7 @@ def main() -> int:
     OUT.mkdir(exist_ok=True)
     os.environ.setdefault("PYTHONHASHSEED", "0")
     print(f"meshplan benchmarks on {machine()}")
+    compile_bytecode()
     p300 = scan(300_000)
     in_process(p300)
     print()

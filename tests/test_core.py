@@ -263,3 +263,22 @@ def test_slicing_an_edge_on_a_plane_gives_it_once_from_the_triangle_below():
     s = slice_mesh(np.array([below, above, touch], float), [1.0])
     assert s.face.tolist() == [0]
     assert {tuple(p) for p in s.segments[0]} == {(2.0, 0.0), (0.0, 2.0)}
+
+
+@pytest.mark.parametrize("longest_m", [0.3, 0.05])
+def test_compiled_face_sampling_gives_the_numpy_reference_points(longest_m):
+    # faces from 1 cm to 2 m: some kept whole, some split a few times, and at 5 cm some into
+    # thousands of pieces, which grows the kernel's piece and stack buffers many times over
+    from meshplan._kernels import sample_faces
+    from meshplan.plan.doors import _subdivide
+    from meshplan.plan.rooms import sample_triangles
+
+    rng = np.random.default_rng(3)
+    tri = rng.random((400, 3, 3)) * rng.uniform(0.01, 2.0, (400, 1, 1))
+    got = sample_faces(tri, longest_m, 0.05)
+    want = sample_triangles(_subdivide(tri, longest_m), 0.05)
+    assert got.shape == want.shape and len(got) > 10 * len(tri)
+    # the same points in another order, to rounding (a loop and numpy's matmul add in their own
+    # orders): sorted by their coordinates rounded to a nanometre
+    order = lambda p: p[np.lexsort(np.round(p, 9).T[::-1])]  # noqa: E731
+    np.testing.assert_allclose(order(got), order(want), rtol=0, atol=1e-12)

@@ -265,35 +265,62 @@ def _edge3(t):  # pragma: no cover - compiled
     return best
 
 
+#: The four pieces of a face split at its edge midpoints, as indices into its corners
+#: ``a, b, c`` (0-2) and midpoints ``ab, bc, ca`` (3-5): ``(a, ab, ca), (ab, b, bc), (ca, bc, c),
+#: (ab, bc, ca)``, the order of ``meshplan.plan.doors._subdivide``.
+_QUARTERS = np.array([[0, 3, 5], [3, 1, 4], [5, 4, 2], [3, 4, 5]], np.int64)
+
+
+@njit(cache=True, nogil=True)
+def _put(dst, i, src):  # pragma: no cover - compiled
+    """``dst[i] = src[:3, :3]``, element by element. Numba compiles an array assignment through
+    its broadcasting machinery: four of them made ``sample_faces`` the slowest kernel to
+    compile by far (6.9 s of a fresh install's first 13.5 s run on the 300k-face apartment)."""
+    for k in range(3):
+        for d in range(3):
+            dst[i, k, d] = src[k, d]
+
+
+@njit(cache=True, nogil=True)
+def _grown(a, rows, size):  # pragma: no cover - compiled
+    """A new (``size``, 3, 3) array holding the first ``rows`` faces of ``a``."""
+    out = np.empty((size, 3, 3), np.float64)
+    for r in range(rows):
+        _put(out, r, a[r])
+    return out
+
+
 @njit(cache=True, nogil=True)
 def _split_pieces(t, longest, stack, pieces):  # pragma: no cover - compiled
     """The pieces of face ``t`` split into four at its edge midpoints until no edge exceeds
     ``longest`` (corners in the order of ``meshplan.plan.doors._subdivide``), written to
     ``pieces`` (grown as needed); returns them, their number and the (grown) stack."""
     top = 0
-    stack[0] = t
+    _put(stack, 0, t)
+    corners = np.empty((6, 3), np.float64)
     n = 0
     while top >= 0:
-        cur = stack[top].copy()
+        for k in range(3):  # corners[:3] = stack[top]: the face popped
+            for d in range(3):
+                corners[k, d] = stack[top, k, d]
         top -= 1
-        if not (_edge3(cur) > longest):
+        if not (_edge3(corners) > longest):
             if n == pieces.shape[0]:
-                grown = np.empty((2 * n, 3, 3), np.float64)
-                grown[:n] = pieces
-                pieces = grown
-            pieces[n] = cur
+                pieces = _grown(pieces, n, 2 * n)
+            _put(pieces, n, corners)
             n += 1
             continue
         if top + 4 >= stack.shape[0]:
-            grown = np.empty((2 * stack.shape[0] + 8, 3, 3), np.float64)
-            grown[: top + 1] = stack[: top + 1]
-            stack = grown
-        a, b, c = cur[0], cur[1], cur[2]
-        ab, bc, ca = 0.5 * (a + b), 0.5 * (b + c), 0.5 * (c + a)
-        for corners in ((a, ab, ca), (ab, b, bc), (ca, bc, c), (ab, bc, ca)):
+            stack = _grown(stack, top + 1, 2 * stack.shape[0] + 8)
+        for d in range(3):
+            corners[3, d] = 0.5 * (corners[0, d] + corners[1, d])
+            corners[4, d] = 0.5 * (corners[1, d] + corners[2, d])
+            corners[5, d] = 0.5 * (corners[2, d] + corners[0, d])
+        for q in range(4):
             top += 1
             for k in range(3):
-                stack[top, k] = corners[k]
+                for d in range(3):
+                    stack[top, k, d] = corners[_QUARTERS[q, k], d]
     return pieces, n, stack
 
 
@@ -319,11 +346,12 @@ def _grid_points(p, k, out, j):  # pragma: no cover - compiled
 @njit(cache=True, nogil=True)
 def sample_faces(tri, longest, spacing):  # pragma: no cover - compiled
     """The sample points of ``meshplan.plan.rooms.sample_triangles(_subdivide(tri, longest),
-    spacing)``, the same numbers (in another order).
+    spacing)``, the same points in another order (to rounding: numpy's matmul adds the
+    barycentric products in its own order).
 
     Each face is split into four until no edge exceeds ``longest``; each piece gets the
     barycentric grid of ``k = clip(ceil(edge / spacing), 1, 64)`` steps per edge, every point
-    ``(1 - a - b) t0 + a t1 + b t2`` as numpy's ``einsum`` computes it.
+    ``(1 - a - b) t0 + a t1 + b t2``.
     """
     n = tri.shape[0]
     stack = np.empty((64, 3, 3), np.float64)

@@ -316,8 +316,8 @@ def _subdivide(tri: FloatArray, longest: float) -> FloatArray:
 
 def _samples(tri: FloatArray, cell: float) -> FloatArray:
     """Points covering the faces ``tri`` on a grid finer than ``cell``: the points of
-    ``sample_triangles(_subdivide(tri, MAX_SAMPLED_EDGE_M), 0.7 * cell)``, the same numbers, in
-    one compiled pass (no copies of the pieces)."""
+    ``sample_triangles(_subdivide(tri, MAX_SAMPLED_EDGE_M), 0.7 * cell)`` (to rounding), in one
+    compiled pass (no copies of the pieces)."""
     if not len(tri):
         return np.zeros((0, 3))
     return sample_faces(np.ascontiguousarray(tri, dtype=np.float64), MAX_SAMPLED_EDGE_M, 0.7 * cell)
