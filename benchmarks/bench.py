@@ -180,9 +180,10 @@ def start_up(repeats: int = 5) -> None:
 
 
 def end_to_end(
-    path: Path, target: float, label: str, memory_gb: float | None = None, repeats: int = 5, cpu_target: float | None = None
-) -> None:
-    """Fresh ``meshplan run`` processes, timed from outside: the median and spread of ``repeats``."""
+    path: Path, target: float | None, label: str, memory_gb: float | None = None, repeats: int = 5, cpu_target: float | None = None
+) -> tuple[float, int, dict[str, float]]:
+    """Fresh ``meshplan run`` processes, timed from outside: the median and spread of ``repeats``.
+    Returns the median, the scan's faces and the stage timings of the last run's plan.json."""
     out = OUT / f"e2e-{path.parent.name}"
     cmd = [str(BIN), "run", str(path), "-a", str(path.parent / "annotations.json"), "-o", str(out), "--force", "--quiet"]
     subprocess.run(cmd, check=True)  # warm the numba cache for this environment
@@ -207,6 +208,22 @@ def end_to_end(
             rows.append((f"peak memory {label} (GB)", gb, memory_gb, None))
     doc = json.loads((out / "plan.json").read_text())
     print(f"  ({doc['input']['faces']:,} faces; pipeline total {doc['timings']['total']:.2f} s inside the process)")
+    return dt, int(doc["input"]["faces"]), doc["timings"]
+
+
+#: The stages of plan.json's ``timings``, in the order they run.
+STAGES = ("load", "orient", "walls", "rooms", "slice_draw", "write")
+
+
+def per_million(runs: list[tuple[float, int, dict[str, float]]]) -> None:
+    """Issue 15's scale table: end to end and each stage (inside the process, from plan.json)
+    in seconds per million faces, for each size run. A linear cost gives the same figure at
+    every size; a fixed cost (start-up, imports, page layout) makes the small scans dearer."""
+    print("\nseconds per million faces (end to end: median of the fresh processes above; stages: the last run's plan.json)")
+    print(f"  {'faces':>10s} {'end to end':>11s} " + " ".join(f"{k:>10s}" for k in STAGES))
+    for wall, faces, timings in runs:
+        m = faces / 1e6
+        print(f"  {faces:>10,d} {wall / m:>11.2f} " + " ".join(f"{timings.get(k, float('nan')) / m:>10.2f}" for k in STAGES))
 
 
 def compile_bytecode() -> None:
@@ -233,12 +250,15 @@ def main() -> int:
     p300 = scan(300_000)
     in_process(p300)
     print()
-    end_to_end(p300, 1.5, "300k faces", memory_gb=None, cpu_target=3.0)  # issue 15: 1.5 s wall, 3 s CPU
+    sizes = [end_to_end(p300, 1.5, "300k faces", memory_gb=None, cpu_target=3.0)]  # issue 15: 1.5 s wall, 3 s CPU
     with load_meter("start-up, 2 x 5 fresh processes"):
         start_up()
     if not args.quick:
-        p3m = scan(3_000_000)
-        end_to_end(p3m, 10.0, "3M faces", memory_gb=2.0, repeats=1)  # issue 15: 10 s, 2 GB
+        # issue 15: cost linear in faces, measured at 0.3M, 1M and 3M (in this order: the peak
+        # memory is the largest child's so far)
+        sizes.append(end_to_end(scan(1_000_000), None, "1M faces", repeats=3))
+        sizes.append(end_to_end(scan(3_000_000), 10.0, "3M faces", memory_gb=2.0, repeats=1))  # issue 15: 10 s, 2 GB
+    per_million(sizes)
     batch = ROOT / "benchmarks" / "bench_batch.py"
     if batch.exists():
         print()
