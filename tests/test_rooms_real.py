@@ -18,7 +18,7 @@ import shapely
 from conftest import SHARED
 from shapely.geometry import LineString, Polygon
 
-from meshplan.plan.closure import close_walls, reach_walls, straighten
+from meshplan.plan.closure import _corner_fills, close_walls, reach_walls, straighten
 from meshplan.plan.params import PlanParams
 from meshplan.plan.rooms import _open_rooms
 
@@ -30,10 +30,11 @@ TRUTH = SHARED / "truth"
 REAL_ROOMS = {
     # closed on its open side by the partition's run to the edge of the scan (closure.run_to_boundary)
     "hl1_ashro_room_45deg.obj": (0.9, 0.08, 1),
-    # the north wall was not scanned: the room follows the scanned footprint there (17 % short);
+    # the north wall was not scanned: the room follows the scanned footprint there (11 % short);
     # carried up to the west and south walls and the south wall's continuation where furniture
-    # hid the floor (IoU 0.73 -> 0.81, 25.5 -> 16.7 % short: closure.reach_walls)
-    "hl1_cuny_room_sparse_walls.obj": (0.79, 0.19, 1),
+    # hid the floor (IoU 0.73 -> 0.81, 25.5 -> 16.7 % short: closure.reach_walls), and into the
+    # south-east corner the continued walls meet in (0.81 -> 0.86, 16.7 -> 11.1 %)
+    "hl1_cuny_room_sparse_walls.obj": (0.84, 0.13, 1),
     "hl1_hemkinator_large_hall.ply": (0.95, 0.02, 1),
     # only the west wall is sure; closed by the footprint (15 % short)
     "hl1_holosoma_room_sparse_walls.obj": (0.78, 0.18, 1),
@@ -318,6 +319,35 @@ def test_a_room_is_carried_up_to_the_wall_its_floor_stops_short_of():
     grown = _reach(floor, [(0.0, 3.0), (4.0, 3.0)], (0.0, -1.0))  # the face looks north, at the room
     assert grown.area == pytest.approx(12.0, abs=1e-6)
     assert grown.bounds == pytest.approx((0.0, 0.0, 4.0, 3.0))
+
+
+def test_a_room_carried_up_to_two_walls_is_carried_into_their_corner():
+    """A 4 x 3 m room whose floor was not seen in its south-east corner (a wardrobe in it,
+    1.0 x 0.9 m): carried up to the south and the east wall, it fills the corner they meet in.
+    Not when a wall line crosses the corner, when the walls' lines do not meet there, or when
+    the floor stops more than twice wall_reach_m short of the corner (a notch, not furniture)."""
+    south = ([(0.0, 3.0), (4.0, 3.0)], (0.0, -1.0))
+    east = ([(4.0, 0.0), (4.0, 3.0)], (-1.0, 0.0))
+    floor = shapely.box(0.0, 0.0, 4.0, 3.0).difference(shapely.box(3.0, 2.1, 4.0, 3.0))
+    assert _reach(floor, *south, others=[east]).area == pytest.approx(12.0, abs=1e-6)
+    assert _reach(floor, *east, others=[south]).area == pytest.approx(12.0, abs=1e-6)  # either order
+    # a partition across the corner (its line crosses the corner's rectangle)
+    partition = ([(3.5, 2.4), (3.5, 3.0)], (1.0, 0.0))
+    assert _reach(floor, *south, others=[east, partition]).area == pytest.approx(floor.area, abs=1e-6)
+    # the east wall scanned (or continued) only to 0.5 m short of the corner: no corner
+    short = ([(4.0, 0.0), (4.0, 2.5)], (-1.0, 0.0))
+    assert _reach(floor, *south, others=[short]).area == pytest.approx(floor.area, abs=1e-6)
+    # a notch 2 m along each wall is part of the room's shape
+    notch = shapely.box(0.0, 0.0, 4.0, 3.0).difference(shapely.box(2.0, 1.0, 4.0, 3.0))
+    assert _reach(notch, *south, others=[east]).area == pytest.approx(notch.area, abs=1e-6)
+    # the same two bands, 1 m short of the corner of the walls along each: the corner is filled
+    # when it is the room's own, not when the room wraps round the outside of it (an L-shaped
+    # room round a notch: the corner's inside lies behind both faces)
+    lines = [LineString([(4.0, 2.0), (4.0, 0.0)]), LineString([(6.0, 2.0), (4.0, 2.0)])]
+    reached = {0: (1.0, 2.0, 2.0), 1: (0.0, 1.0, 2.0)}  # each band 1 m short of (4, 2)
+    inside = _corner_fills(lines, np.array([(1.0, 0.0), (0.0, -1.0)]), reached, 1.6)  # a room in the notch
+    assert len(inside) == 1 and inside[0][2].area == pytest.approx(1.0) and inside[0][2].contains(shapely.Point(4.5, 1.5))
+    assert _corner_fills(lines, np.array([(-1.0, 0.0), (0.0, 1.0)]), reached, 1.6) == []  # the L round it
 
 
 def test_a_room_is_not_carried_through_a_wall_or_into_another_room():

@@ -203,6 +203,17 @@ MIN_REACH_SPAN_M = 0.5
 #: room from being carried across it: the rounding of lines that meet at the wall.
 REACH_CROSSING_M = 0.01
 
+#: Two walls' lines meet in a corner when an end of each lies within this distance (m) of the
+#: other's: the ends of lines closed onto each other, which meet to rounding.
+CORNER_ENDS_M = 0.1
+
+#: How far along either wall of a corner a room carried up to both walls may stop short of the
+#: corner and still be carried into it, in multiples of ``wall_reach_m`` (1.6 m by default): a
+#: corner hidden by furniture along both walls (a wardrobe, an L of desks, each up to
+#: ``wall_reach_m`` deep, so the corner they hide runs twice that along the walls at most); a
+#: room that stops farther short has a notch there, not furniture.
+CORNER_REACH_TIMES = 2.0
+
 
 def reach_walls(shape: Polygon, walls: list[LineString], normals: FloatArray, beyond, reach_m: float) -> Polygon:
     """``shape`` (a room the scanned floor closes) carried up to every wall in ``walls`` (as
@@ -224,6 +235,7 @@ def reach_walls(shape: Polygon, walls: list[LineString], normals: FloatArray, be
     grown = shape
     centre = np.asarray(shape.representative_point().coords[0])
     tree = shapely.STRtree(walls)  # the walls that may cross a band, from one tree
+    reached: dict[int, tuple[float, float, float]] = {}  # wall: (u0, u1, length) of its band
     for k, wall in enumerate(walls):
         a, b = np.asarray(wall.coords[0], float), np.asarray(wall.coords[-1], float)
         length = float(np.hypot(*(b - a)))
@@ -252,10 +264,55 @@ def reach_walls(shape: Polygon, walls: list[LineString], normals: FloatArray, be
         if beyond is not None and not beyond.is_empty:
             fill = fill.difference(beyond)
         grown = grown.union(fill)
+        reached[k] = (u0, u1, length)
+    for k, j, fill in _corner_fills(walls, normals, reached, reach_m * CORNER_REACH_TIMES):
+        core = fill.buffer(-REACH_CROSSING_M, join_style="mitre")
+        if any(w not in (k, j) for w in tree.query(core, predicate="intersects")):
+            continue  # another wall line crosses the corner: the room does not run into it
+        if beyond is not None and not beyond.is_empty:
+            fill = fill.difference(beyond)
+        grown = grown.union(fill)
     parts = [p for p in shapely.get_parts(grown) if isinstance(p, Polygon) and p.area > 0]
     if not parts:
         return shape
     return Polygon(max(parts, key=lambda p: p.intersection(shape).area).exterior)
+
+
+def _corner_fills(
+    walls: list[LineString], normals: FloatArray, reached: dict[int, tuple[float, float, float]], longest_m: float
+) -> list[tuple[int, int, Polygon]]:
+    """The corners a room carried up to two walls stops short of (see :func:`reach_walls`):
+    for each two walls in ``reached`` (their bands' stretch ``u0``-``u1`` of their ``length``)
+    whose lines meet in a corner, end to end and not in line, with each in front of the other
+    (``normals``: a room's corner, not the outside of one it wraps round): the two walls and
+    the rectangle (a parallelogram at an oblique corner) between the corner and the ends of both
+    bands, where neither stops more than ``longest_m`` short of it."""
+    ends = {k: (np.asarray(walls[k].coords[0], float), np.asarray(walls[k].coords[-1], float)) for k in reached}
+    out = []
+    keys = sorted(reached)
+    for i, k in enumerate(keys):
+        for j in keys[i + 1 :]:
+            for ek, pk in enumerate(ends[k]):
+                for ej, pj in enumerate(ends[j]):
+                    if np.hypot(*(pk - pj)) > CORNER_ENDS_M:
+                        continue
+                    # from the corner along each wall, and how far its band stops short of it
+                    dk = ends[k][1 - ek] - pk
+                    dj = ends[j][1 - ej] - pj
+                    dk, dj = dk / np.hypot(*dk), dj / np.hypot(*dj)
+                    if abs(float(dk @ dj)) > np.cos(np.radians(MIN_MEETING_ANGLE_DEG)):
+                        continue  # in line, or nearly: no corner
+                    if float(dj @ normals[k]) <= 0 or float(dk @ normals[j]) <= 0:
+                        continue  # the corner's inside lies behind a wall's face
+                    u0, u1, length = reached[k]
+                    gk = u0 if ek == 0 else length - u1
+                    u0, u1, length = reached[j]
+                    gj = u0 if ej == 0 else length - u1
+                    if min(gk, gj) <= REACH_CROSSING_M or max(gk, gj) > longest_m:
+                        continue  # the bands meet already, or the room stops too far short
+                    c = 0.5 * (pk + pj)
+                    out.append((k, j, Polygon([c, c + gk * dk, c + gk * dk + gj * dj, c + gj * dj])))
+    return out
 
 
 def smooth(piece: Polygon, radius: float) -> Polygon:
