@@ -211,6 +211,21 @@ def end_to_end(
     return dt, int(doc["input"]["faces"]), doc["timings"]
 
 
+def first_run(path: Path) -> None:
+    """``meshplan run`` as the first run after installing: numba's cache empty (a new
+    ``NUMBA_CACHE_DIR``), so the run compiles its kernels as it meets them. One fresh process."""
+    import tempfile
+
+    out = OUT / f"e2e-first-{path.parent.name}"
+    cmd = [str(BIN), "run", str(path), "-a", str(path.parent / "annotations.json"), "-o", str(out), "--force", "--quiet"]
+    with tempfile.TemporaryDirectory(prefix="meshplan-bench-numba-") as cache:
+        env = {**os.environ, "NUMBA_CACHE_DIR": cache}
+        with load_meter("1 fresh process, numba's cache empty"):
+            t0 = time.perf_counter()
+            subprocess.run(cmd, check=True, env=env)
+            record("meshplan run, first run after installing, 300k", time.perf_counter() - t0)
+
+
 #: The stages of plan.json's ``timings``, in the order they run.
 STAGES = ("load", "orient", "walls", "rooms", "slice_draw", "write")
 
@@ -251,6 +266,7 @@ def main() -> int:
     in_process(p300)
     print()
     sizes = [end_to_end(p300, 1.5, "300k faces", memory_gb=None, cpu_target=3.0)]  # issue 15: 1.5 s wall, 3 s CPU
+    first_run(p300)
     with load_meter("start-up, 2 x 5 fresh processes"):
         start_up()
     if not args.quick:
