@@ -176,12 +176,15 @@ def straighten(piece: Polygon, others, fit_m: float, smooth_m: float) -> Polygon
     ``piece`` smoothed (:func:`smooth`, over ``smooth_m``). The rotated bounding rectangle is
     tried too (walls drift off the axes in long scans) and the smaller one that fits kept.
 
-    The rectangle replaces the ragged edge of the scanned floor by the straight lines of its
-    extreme reach; ``fit_m`` bounds how far it reaches where no floor was seen.
+    The rectangle replaces the ragged edge of the scanned floor by straight lines, each side
+    moved in from the floor's extreme reach to the middle of its fringe (where the floor covers
+    half the side, :func:`_sides_on_the_floor`); ``fit_m`` bounds how far it reaches where no
+    floor was seen.
     """
     best = piece
     core = smooth(piece, smooth_m)  # spikes of the fringe set no rectangle's side
     for rect in (shapely.envelope(core), shapely.oriented_envelope(core)):
+        rect = _sides_on_the_floor(rect, core, fit_m)
         if others is not None and not others.is_empty:
             rect = rect.difference(others)
         parts = [p for p in shapely.get_parts(rect) if isinstance(p, Polygon)]
@@ -193,6 +196,45 @@ def straighten(piece: Polygon, others, fit_m: float, smooth_m: float) -> Polygon
     if best is piece:
         best = core
     return best
+
+
+#: Step (m) by which a side of a straightened room is moved in from the floor's extreme reach:
+#: finer than the fringe of a scan (5-10 cm), coarser than rounding.
+SIDE_STEP_M = 0.01
+
+#: A side of a straightened room stands where the scanned floor covers at least this share of
+#: its length: the middle of the fringe, not its outermost tooth (a side set on the floor's
+#: extreme reach takes in every tooth of the fringe, and past a missing wall the floor runs on
+#: in teeth into the next room), nor its innermost notch.
+SIDE_COVER_SHARE = 0.5
+
+
+def _sides_on_the_floor(rect: Polygon, core: Polygon, limit_m: float) -> Polygon:
+    """``rect`` (a rectangle round ``core``) with each side moved in, by at most ``limit_m``,
+    to the first line along which ``core`` covers :data:`SIDE_COVER_SHARE` of the side."""
+    if not isinstance(rect, Polygon) or limit_m <= 0:
+        return rect
+    xy = np.asarray(rect.exterior.coords)[:4]
+    if len(xy) < 4:
+        return rect
+    a, b, d = xy[0], xy[1] - xy[0], xy[3] - xy[0]
+    la, ld = float(np.hypot(*b)), float(np.hypot(*d))
+    if la <= 2 * SIDE_STEP_M or ld <= 2 * SIDE_STEP_M:
+        return rect
+    eb, ed = b / la, d / ld
+    steps = np.arange(0.0, min(limit_m, 0.45 * min(la, ld)) + 1e-9, SIDE_STEP_M)
+    # for each side: its line moved in by each step, across the whole rectangle
+    cut = []
+    for along, e_move, e_line, span in ((0.0, ed, eb, la), (ld, -ed, eb, la), (0.0, eb, ed, ld), (la, -eb, ed, ld)):
+        base = a + (along * (ed if e_line is eb else eb))
+        starts = base[None, :] + steps[:, None] * e_move[None, :]
+        lines = shapely.linestrings(np.stack([starts, starts + span * e_line[None, :]], axis=1))
+        cover = shapely.length(shapely.intersection(lines, core)) / span
+        ok = np.flatnonzero(cover >= SIDE_COVER_SHARE)
+        cut.append(float(steps[ok[0]]) if len(ok) else 0.0)
+    lo_d, hi_d, lo_b, hi_b = cut[0], ld - cut[1], cut[2], la - cut[3]
+    corners = [a + lo_b * eb + lo_d * ed, a + hi_b * eb + lo_d * ed, a + hi_b * eb + hi_d * ed, a + lo_b * eb + hi_d * ed]
+    return Polygon(corners)
 
 
 #: Shortest stretch (m) of a wall that a room must come near for the room to be carried up to
@@ -318,11 +360,17 @@ def _corner_fills(
 def smooth(piece: Polygon, radius: float) -> Polygon:
     """``piece`` without the notches and spikes narrower than ``2 * radius`` (a closing, then
     an opening, with a square: the ragged fringe of a scanned floor goes, its straight runs
-    and right-angled corners stay)."""
+    and right-angled corners stay).
+
+    The result is kept inside the piece's convex hull, where a closing and an opening with a
+    square stay: mitred offsets of a jagged outline are not those of a square, and at its sharp
+    corners they reach out by up to the mitre limit (5 radii), which would set a rectangle's
+    side beyond anything scanned."""
     if radius <= 0:
         return piece
     with np.errstate(divide="ignore", invalid="ignore"):
         out = piece.buffer(radius, join_style="mitre").buffer(-2 * radius, join_style="mitre").buffer(radius, join_style="mitre")
+        out = out.intersection(piece.convex_hull)
     parts = [p for p in shapely.get_parts(out) if isinstance(p, Polygon) and p.area > 0]
     if not parts:
         return piece
