@@ -215,7 +215,10 @@ def draw_sheet(path: Path, stem: str, run_dir: Path, plan: dict, truth: dict | N
     ax.legend(handles=handles, fontsize=6, loc="upper center", bbox_to_anchor=(0.5, -0.08), ncol=4, frameon=False)
     ax.set_title("drafting, story 0: meshplan (grey, black) and truth (colours)", fontsize=9)
     fig.suptitle(f"{stem}   {sheet_caption(report)}", fontsize=10)
-    fig.tight_layout()
+    # the caption above both panels, the legend below the drafting plan: both inside the sheet
+    # whatever the panels' aspect (tight_layout alone let a tall pen-and-ink image run under
+    # the caption and the legend off the bottom)
+    fig.tight_layout(rect=(0.0, 0.08, 1.0, 0.95))
     fig.savefig(path, dpi=SHEET_DPI)
     plt.close(fig)
 
