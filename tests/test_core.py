@@ -75,6 +75,13 @@ def test_transformed_and_flipped_meshes_carry_their_corners_and_normals_over(mat
     np.testing.assert_allclose(a.triangles, b.triangles, atol=1e-12)
     np.testing.assert_allclose(a.face_normals, b.face_normals, atol=1e-12)
     np.testing.assert_allclose(a.face_areas, b.face_areas, rtol=1e-12, atol=1e-12)
+    # the same in one pass (the plan mesh's way), with or without the cache
+    for mesh in (m, Mesh(v, f)):
+        c = mesh.transformed(np.array(matrix, dtype=float), flip)
+        np.testing.assert_array_equal(c.faces, a.faces)
+        np.testing.assert_allclose(c.vertices, a.vertices, atol=1e-12)
+        np.testing.assert_allclose(c.face_normals, b.face_normals, atol=1e-12)
+        assert not c.faces.flags.writeable and not c.vertices.flags.writeable
 
 
 def test_a_mesh_computes_its_released_arrays_again():

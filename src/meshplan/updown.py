@@ -81,7 +81,7 @@ def up_by_doors(mesh: Mesh, orientation: Orientation, plan_mesh: Mesh, options: 
         other = orient(mesh, options.orient, up_hint=-orientation.gravity.up)
     except MeshplanError:  # upside down there is no floor at all
         return here
-    other_mesh = mesh.transformed(other.transform).with_flipped(other.flipped)
+    other_mesh = mesh.transformed(other.transform, other.flipped)
     n_other, other_walls, other_openings = doors(other, other_mesh)
     log.debug("up in doubt (sign evidence %.2f): %d doors this way up, %d the other", orientation.gravity.sign_evidence, n_here, n_other)
 
@@ -108,7 +108,7 @@ def settle_up(mesh: Mesh, orientation: Orientation, options: RunOptions) -> Upri
     options
         Every parameter of the run.
     """
-    plan_mesh = mesh.transformed(orientation.transform).with_flipped(orientation.flipped)
+    plan_mesh = mesh.transformed(orientation.transform, orientation.flipped)
     if up_in_doubt(orientation, options):
         return up_by_doors(mesh, orientation, plan_mesh, options)
     return Upright(orientation, plan_mesh)
