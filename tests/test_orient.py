@@ -299,3 +299,26 @@ def test_thin_products_with_one_blas_thread_are_the_same_bits():
         expected = points @ m[:3, :3].T
     np.testing.assert_array_equal(thin_product(points, m[:3, :3].T), expected)
     np.testing.assert_array_equal(transform_points(m, points), expected + m[:3, 3])
+
+
+def test_a_very_large_mesh_is_estimated_on_an_even_sample(monkeypatch):
+    """Above ``ESTIMATE_MAX_FACES`` the up direction, the levels and the wall directions come
+    from every k-th face, each standing for k faces' area: the same orientation as from every
+    face (gravity within 0.02 degree, floors and ceilings within 5 mm, the same yaw), the
+    stories and facing of every face all the same."""
+    from meshplan.orient import orientation
+
+    scan = generate(SynthParams(preset="apartment", seed=2))
+    full = orient(scan.mesh)
+    sample = orientation.estimation_sample(scan.mesh, scan.mesh.n_faces // 7)
+    assert sample is not scan.mesh and 7 <= scan.mesh.n_faces / sample.n_faces <= 9
+    assert sample.area == pytest.approx(scan.mesh.area, rel=0.03)  # each face stands for k
+    assert orientation.estimation_sample(scan.mesh, scan.mesh.n_faces) is scan.mesh
+    monkeypatch.setattr(orientation, "ESTIMATE_MAX_FACES", scan.mesh.n_faces // 7)
+    part = orient(scan.mesh)
+    assert angle_deg(part.gravity.up, full.gravity.up) < 0.02
+    assert angle_deg(part.rotation @ [1.0, 0.0, 0.0], full.rotation @ [1.0, 0.0, 0.0]) < 0.05
+    for a, b in zip(part.stories, full.stories, strict=True):
+        assert abs(a.floor - b.floor) < 0.005 and abs(a.ceiling - b.ceiling) < 0.005
+    assert len(part.face_story) == scan.mesh.n_faces and np.mean(part.face_story == full.face_story) > 0.999
+    assert len(part.flipped) == scan.mesh.n_faces
