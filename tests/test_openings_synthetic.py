@@ -16,7 +16,7 @@ from meshplan.export import plan_document
 
 pytestmark = pytest.mark.slow  # whole runs of meshplan: not part of the unit layer (-m "not slow")
 
-SCENES = [(p, s) for p in ("apartment", "office") for s in (1, 2, 3)]
+SCENES = [(p, s) for p in ("apartment", "office") for s in (1, 2, 3)] + [("apartment", 8)]  # seed 8: scan holes at a window's frame
 
 #: Smallest precision and recall, pooled per preset (the level reached is 1.0 for both).
 DOOR_MIN = 0.95
@@ -102,3 +102,26 @@ def test_a_ragged_scan_hole_is_no_window():
     hole = (yy - 10.5) ** 2 + (xx - 10.5) ** 2 <= 110
     assert not _straight(hole, WINDOW_EDGE_CELLS, 0.75)
     assert _straight(np.ones((22, 22), bool), WINDOW_EDGE_CELLS, 0.75)
+
+
+def test_the_largest_rectangle_of_a_ragged_region():
+    """The window inside a scan hole that ran into its frame: the largest rectangle of empty
+    cells, and how many of its sides are wall."""
+    from meshplan.plan.doors import _framed_sides, _largest_rectangle
+
+    box = np.zeros((12, 10), dtype=bool)
+    box[2:8, 1:7] = True  # the window (6 x 6 cells)
+    box[0:3, 5:10] = True  # a hole running into its head and on to the right
+    r0, r1, c0, c1 = _largest_rectangle(box)
+    assert (r0, r1, c0, c1) == (2, 8, 1, 7)
+    grid = ~box
+    assert _framed_sides(grid, slice(r0, r1), slice(c0, c1), 0.75) == 3  # the head is partly hole
+    assert _framed_sides(grid, slice(0, 3), slice(5, 10), 0.75) <= 1
+
+
+def test_a_window_whose_frame_a_scan_hole_runs_into_is_found(computed):
+    """Apartment seed 8: two scan holes above a window's head, joined to its empty region,
+    made it no rectangle; the largest rectangle in the region, framed on three sides, is it."""
+    scan, result = computed("apartment", 8)
+    found, true, matched = _score(plan_document(result), scan.truth, "window")
+    assert matched == true == found, (found, true, matched)

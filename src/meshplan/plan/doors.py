@@ -15,8 +15,9 @@ across it, positive into the room the face was scanned from):
   corner is a jamb. An empty region is a door when it reaches the floor, has a door's width,
   straight jambs and a head at door height (a lintel above it), or, where the scan missed the
   lintel, runs up to the ceiling with the floor seen through it beyond the wall. It is a window
-  when it has a sill and a head and straight edges on all four sides. Scan holes are ragged and
-  are left alone.
+  when it has a sill and a head and straight edges on all four sides, or, where a scan hole
+  runs into its frame, when the largest rectangle in the empty region is framed by wall on
+  three sides at least. Scan holes are ragged and are left alone.
 * **recesses**: a window whose glazing (a blind, a lattice) was scanned, set back in a reveal
   behind the face, leaves no gap in the slab. The face's own plane and the surfaces behind it
   that face the room are rasterized apart; a region behind the face where its plane is missing
@@ -26,10 +27,11 @@ across it, positive into the room the face was scanned from):
   slopes into the region instead).
 * **panels**: parametric models (RoomPlan, Quest scene models) model a door or a window as a
   separate box or quad in the wall plane, over an uncut wall. A separate connected piece of the
-  mesh that lies in the wall's slab, covers its rectangle, stands on the floor, has a door's
-  width and height and ends below the ceiling is such a door. A thin piece of a few large
-  triangles (a modelled primitive, not a fragment of a real scan) centred on the wall's plane,
-  clear of the floor and below the ceiling, with a window's width and height, is a window.
+  mesh that lies in the wall's slab, covers its rectangle, is a modelled primitive (a few large
+  triangles), stands on the floor, has a door's width and height and ends below the ceiling is
+  such a door. A thin piece of a few large triangles (a modelled primitive, not a fragment of a
+  real scan) centred on the wall's plane, clear of the floor and below the ceiling, with a
+  window's width and height, is a window.
 
 Why one long module: a face's raster (built once) serves both searches, doors read column by
 column and windows as regions, with the shared edge and straightness tests; the parametric door
@@ -727,10 +729,73 @@ def _doors(f: _Frame, walls: FlatWalls, floor_cols: np.ndarray, params: PlanPara
 def _windows(f: _Frame, walls: FlatWalls, params: PlanParams) -> list[Candidate]:
     """Windows: empty regions with wall below (a sill), above (a head) and beside them, and
     straight edges all round."""
+    nrow, ncol = f.grid.shape
+    empty = ~f.grid
+    out = _window_regions(f, walls, params, empty)
+    # a scan hole running into a window's frame (its head, a jamb) joins the window's empty
+    # region, which is then neither a rectangle nor straight-edged: the window is the largest
+    # rectangle of empty cells in the region, held to the same tests and framed by wall along
+    # three of its four sides at least (a hole hides part of one side of a frame; the largest
+    # rectangle in a ragged hole has the rest of the hole beyond two or more of its sides)
+    labels, _ = ndimage.label(empty)
+    cores = np.zeros_like(empty)
+    # (a region too small to hold a window's rectangle is a scan hole: most are, and the
+    # rectangle search runs cell by cell)
+    least_cols = int(np.floor((params.window_width_m[0] - 2 * EDGE_CELLS * f.cell) / f.cell))
+    least_rows = int(np.floor(params.window_height_m / f.cell))
+    for k, (rs, cs) in enumerate(ndimage.find_objects(labels), start=1):
+        if cs.start == 0 or cs.stop == ncol or rs.start <= f.margin or rs.stop >= nrow - f.margin:
+            continue  # no window whatever its shape (see _window_regions)
+        if cs.stop - cs.start < least_cols or rs.stop - rs.start < least_rows:
+            continue
+        r0, r1, c0, c1 = _largest_rectangle(labels[rs, cs] == k)
+        cores[rs.start + r0 : rs.start + r1, cs.start + c0 : cs.start + c1] = True
+    if cores.any():
+        out += [c for c in _window_regions(f, walls, params, cores, framed_sides=3) if not any(_overlap(c, o) for o in out)]
+    return out
+
+
+def _largest_rectangle(box: np.ndarray) -> tuple[int, int, int, int]:
+    """``(r0, r1, c0, c1)``: the largest axis-aligned rectangle of True cells in ``box``
+    (rows ``[r0, r1)``, columns ``[c0, c1)``), by the histogram of each row's runs upward."""
+    nrow, ncol = box.shape
+    heights = np.zeros(ncol, np.int64)
+    best, out = 0, (0, 0, 0, 0)
+    for r in range(nrow):
+        heights = np.where(box[r], heights + 1, 0)
+        stack: list[int] = []
+        for c in range(ncol + 1):
+            h = int(heights[c]) if c < ncol else 0
+            while stack and int(heights[stack[-1]]) >= h:
+                top = stack.pop()
+                left = stack[-1] + 1 if stack else 0
+                area = int(heights[top]) * (c - left)
+                if area > best:
+                    best, out = area, (r + 1 - int(heights[top]), r + 1, left, c)
+            stack.append(c)
+    return out
+
+
+def _framed_sides(grid: np.ndarray, rs: slice, cs: slice, share: float) -> int:
+    """How many of the four sides just outside the box ``rs`` x ``cs`` of ``grid`` are wall
+    (filled cells) along at least ``share`` of their length."""
+    nrow, ncol = grid.shape
+    sides = (
+        grid[rs.start - 1, cs] if rs.start > 0 else np.zeros(0, bool),
+        grid[rs.stop, cs] if rs.stop < nrow else np.zeros(0, bool),
+        grid[rs, cs.start - 1] if cs.start > 0 else np.zeros(0, bool),
+        grid[rs, cs.stop] if cs.stop < ncol else np.zeros(0, bool),
+    )
+    return sum(bool(side.size) and float(side.mean()) >= share for side in sides)
+
+
+def _window_regions(f: _Frame, walls: FlatWalls, params: PlanParams, empty: np.ndarray, framed_sides: int = 0) -> list[Candidate]:
+    """The windows among the regions of ``empty`` cells of face raster ``f`` (see :func:`_windows`),
+    each framed by wall along at least ``framed_sides`` of its sides (:func:`_framed_sides`)."""
     grid, lo, floor, cell, margin = f.grid, f.lo, f.floor, f.cell, f.margin
     ceiling, vu, vy, w = f.ceiling, f.vu, f.vy, f.wall
     nrow, ncol = grid.shape
-    labels, n = ndimage.label(~grid)
+    labels, n = ndimage.label(empty)
     if n == 0:
         return []
     out = []
@@ -754,6 +819,8 @@ def _windows(f: _Frame, walls: FlatWalls, params: PlanParams) -> list[Candidate]
             continue
         if not (_straight(box, WINDOW_EDGE_CELLS, params.opening_edge_straightness) and _straight(box.T, WINDOW_EDGE_CELLS, params.opening_edge_straightness)):
             continue  # a ragged hole in the scan
+        if framed_sides and _framed_sides(grid, rs, cs, params.opening_edge_straightness) < framed_sides:
+            continue  # the largest rectangle in a ragged hole: the hole runs on beyond two or more sides
         kind = "window"
         # refine the edges from the triangle corners next to them
         band = (vy > low + tol) & (vy < min(high, ceiling - params.opening_margin_m) - tol)
@@ -828,6 +895,10 @@ def _panels(ev: WallEvidence, w: int, floor: float, ceiling: float) -> list[Cand
     )
     area = ev.mesh.face_areas[faces]
     largest = np.maximum.reduceat(area, seg)
+    # a door panel is a modelled primitive too (a box's or a quad's few triangles): a separate
+    # fragment of a scan in the wall's slab (a wardrobe's end, a strip of wall cut off by a
+    # missing seam, a decimated piece of a couple of hundred triangles) is not a door
+    doors &= largest >= PANEL_PRIMITIVE_SHARE * width * (ymax - ymin)
     windows = (
         (np.abs(0.5 * (dmin + dmax)) <= PANEL_PLANE_M) & (dmax - dmin <= PANEL_THICKNESS_M)
         & (ymin >= floor + PANEL_SILL_MIN_M) & (ymax <= ceiling - params.opening_margin_m)
