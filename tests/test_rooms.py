@@ -142,8 +142,9 @@ def test_ifc_export(computed, tmp_path):
     # detected IfcDoor/IfcWindow they mark (tests/test_elements.py); the others IfcAnnotations
     assert len(f.by_type("IfcUnitaryControlElement")) == sum(k == "thermostat" for k in result.annotations.kinds)
     assert len(f.by_type("IfcAnnotation")) == sum(k == "other" for k in result.annotations.kinds)
-    # deterministic
-    assert ifc_bytes(result) == path.read_bytes()
+    # deterministic (run to run: one run in four differed when the API placed a stair's parts
+    # in the order of a set)
+    assert all(ifc_bytes(result) == path.read_bytes() for _ in range(4))
 
 
 def test_evaluate_command(tmp_path, capsys, computed):

@@ -389,8 +389,10 @@ def _add_stairs(f, result: Result, storeys: dict, body) -> None:
             landing = root.create_entity(f, ifc_class="IfcSlab", name=f"Stair {k + 1} landing {i + 1}", predefined_type="LANDING")
             shape(landing, [t], s.rise, stair)
             parts.append(landing)
-        if parts:
-            aggregate.assign_object(f, products=parts, relating_object=stair)
+        # one part at a time: the API walks the products it is given as a set, and re-makes
+        # their placements in that order (the same model got different entity numbers, run to run)
+        for part in parts:
+            aggregate.assign_object(f, products=[part], relating_object=stair)
         ps = pset.add_pset(f, product=stair, name="Pset_StairCommon")
         pset.edit_pset(
             f, pset=ps,
