@@ -161,3 +161,14 @@ def test_evaluate_command(tmp_path, capsys, computed):
     report = json.loads((tmp_path / "r.json").read_text())
     assert report["rooms"]["found"] == len(scan.truth["rooms"])
     assert main(["evaluate", str(plan), str(tmp_path / "missing.json")]) == 2
+
+
+@pytest.mark.parametrize("seed", [1, 2])
+def test_a_parametric_apartment_without_ceiling(computed, seed):
+    """The hard-parametric preset (boxes for walls and furniture, no ceiling; issue 9's
+    parametric room-mode case): every room found, areas within the synthetic bound. Before
+    up was found along a wall here, no room matched."""
+    scan, result = computed("hard-parametric", seed)
+    rooms = evaluate(plan_document(result), scan.truth)["rooms"]
+    assert rooms["found_fraction"] >= 0.95, rooms
+    assert rooms["median_abs_error_pct"] <= 0.5, rooms

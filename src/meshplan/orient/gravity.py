@@ -111,6 +111,17 @@ _ENCLOSURE_MAX_SAMPLES = 10_000
 #: over all faces were 2 s of its orientation).
 _ENCLOSURE_MAX_FACES = 200_000
 
+#: Two faces standing along a candidate up span the same interval along it when both their ends
+#: agree to this (m): the walls of a parametric model (RoomPlan, Quest, a phone's room mode) are
+#: rectangles from one floor to one wall top, exact to the millimetre.
+_WALL_SPAN_BIN_M = 0.05
+
+#: A model is made of wall rectangles (the common-span test applies) when along some candidate
+#: up at least this share of the standing area lies in faces spanning one interval a room's
+#: height long. Scanned meshes, whose faces span 1-25 cm, are far below it; parametric models
+#: reach 0.5-0.85 along their true up.
+_WALL_SPAN_MIN_SHARE = 0.3
+
 #: Plan block (m) of the jackknife that measures how well the floors define their normal: larger
 #: than a scanner's surface patches and the correlation length of its noise (10-50 cm), so that
 #: blocks are nearly independent; small enough that one room gives a dozen blocks.
@@ -318,6 +329,32 @@ def _surface_samples(mesh: Mesh, faces: np.ndarray, spacing: float, single: Floa
     return pts, np.repeat(areas / k, k)
 
 
+def common_wall_span(mesh: Mesh, axis: FloatArray, params: OrientParams) -> float:
+    """Share (0-1) of the area standing along ``axis`` that lies in faces spanning one common
+    interval along it, a room's height long (``min_room_height_m`` to ``max_story_height_m``).
+
+    Were ``axis`` up, in a model made of wall rectangles (parametric exports) the walls stand on
+    one floor and rise to one height, so most of that area shares one span. Along a wall's
+    normal the surfaces standing along it are the floor and the other walls, whose extents vary
+    with the plan. A scanned mesh's faces span centimetres: 0 along every axis.
+    """
+    vertical = np.flatnonzero(np.abs(mesh.face_normals @ axis) <= np.sin(np.radians(params.wall_exclusion_deg)))
+    if not len(vertical):
+        return 0.0
+    h = mesh.triangles[vertical] @ axis
+    lo, hi = np.round(h.min(axis=1) / _WALL_SPAN_BIN_M), np.round(h.max(axis=1) / _WALL_SPAN_BIN_M)
+    areas = mesh.face_areas[vertical]
+    span = (hi - lo) * _WALL_SPAN_BIN_M
+    tall = (span >= params.min_room_height_m) & (span <= params.max_story_height_m)
+    total = float(areas.sum())
+    if not tall.any() or total <= 0:
+        return 0.0
+    base = lo[tall].min()
+    key = (lo[tall] - base) * (hi[tall].max() - base + 1) + (hi[tall] - base)
+    _, inverse = np.unique(key, return_inverse=True)
+    return float(np.bincount(inverse, weights=areas[tall]).max() / total)
+
+
 def _weighted_median(x: FloatArray, w: FloatArray) -> float:
     order = np.argsort(x, kind="stable")
     cum = np.cumsum(w[order])
@@ -437,11 +474,18 @@ def estimate_gravity(
             raise GeometryError("no floor found: the mesh has no faces with an area", "check the scan")
         top = peaks[0].weight
         single = _single_samples(mesh)  # shared by the enclosure tests of every candidate
-        for p in peaks:
-            if p.weight < 0.05 * top:
-                break
+        peaks = peaks[: next((i for i, p in enumerate(peaks) if p.weight < 0.05 * top), len(peaks))]
+        # a model of wall rectangles: the walls share one height along the true up only, and a
+        # candidate whose standing faces share less of it keeps less of its plausibility (down
+        # to half: the walls of an apartment's rooms, each a box with two faces, outweigh its
+        # floor along their normals when no ceiling was modelled)
+        spans = [common_wall_span(mesh, p.axis, params) for p in peaks]
+        rectangles = max(spans, default=0.0) >= _WALL_SPAN_MIN_SHARE
+        for p, span in zip(peaks, spans):
             weight, plaus = _axis_evidence(centroids, normals, areas, p.axis, params)
             plaus *= enclosure(mesh, p.axis, params, single)
+            if rectangles:
+                plaus *= 0.5 + 0.5 * span / max(spans)
             candidates.append(Candidate(p.axis, weight, plaus, weight * plaus))
         best = max(candidates, key=lambda c: c.score)
         declared = None if declared_up is None else unit(np.asarray(declared_up, dtype=np.float64))
