@@ -169,6 +169,12 @@ def test_a_parametric_apartment_without_ceiling(computed, seed):
     parametric room-mode case): every room found, areas within the synthetic bound. Before
     up was found along a wall here, no room matched."""
     scan, result = computed("hard-parametric", seed)
-    rooms = evaluate(plan_document(result), scan.truth)["rooms"]
+    report = evaluate(plan_document(result), scan.truth)
+    rooms, walls = report["rooms"], report["walls"]
     assert rooms["found_fraction"] >= 0.95, rooms
     assert rooms["median_abs_error_pct"] <= 0.5, rooms
+    # each wall is two thin boxes, one on each of its surfaces: the boxes' faces toward the
+    # wall's core are no walls (flat._wall_cores; precision was 0.5 with them). Reached:
+    # recall 1.0, precision 0.72, the rest being the outward faces of the exterior walls,
+    # which a parametric model has and a scan never shows (issue 9, open)
+    assert walls["recall"] >= 0.95 and walls["precision"] >= 0.7, walls

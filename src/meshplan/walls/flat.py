@@ -614,6 +614,40 @@ def _free_standing(rows: list[dict], raster: StoryRaster, floor: float, ceiling:
     return out
 
 
+#: Two wall faces facing each other closer than this (m) are one surface, not the two sides of
+#: a gap: the two faces of a thin box (a RoomPlan wall is one box 0.1 mm thick), each facing
+#: the room on its side, whichever way the box is wound.
+CORE_MIN_M = 0.02
+
+#: Share of the shorter of two faces facing each other that the other must run alongside for
+#: the space between them to be a wall's core.
+CORE_OVERLAP_SHARE = 0.5
+
+
+def _wall_cores(rows: list[dict], params: WallParams) -> np.ndarray:
+    """Rows of one story that face another row across less than a wall's thickness
+    (from :data:`CORE_MIN_M` to ``max_wall_thickness_m``), the two running alongside each other
+    over :data:`CORE_OVERLAP_SHARE` of the shorter: the inside faces of a wall modelled by its
+    two surfaces (a parametric model's thin boxes, one on each side of the wall), which face
+    into the wall's core. A space is wider than a wall is thick, so no room lies between them;
+    the wall's outer faces bound the rooms."""
+    n = len(rows)
+    out = np.zeros(n, dtype=bool)
+    if n < 2:
+        return out
+    nor = np.array([r["normal"] for r in rows], dtype=np.float64)
+    off = np.array([r["offset"] for r in rows])
+    lo, hi = np.array([r["u_min"] for r in rows]), np.array([r["u_max"] for r in rows])
+    opposite = nor @ nor.T <= -np.cos(np.radians(PILASTER_PARALLEL_DEG))  # parallel, facing back
+    # j's plane lies d in front of i's, j facing back: with n_j = -n_i, d = -off_j - off_i;
+    # j's tangent is -i's, so j runs over [-hi_j, -lo_j] along i
+    d = -off[None, :] - off[:, None]
+    overlap = np.minimum(hi[:, None], -lo[None, :]) - np.maximum(lo[:, None], -hi[None, :])
+    shorter = np.minimum((hi - lo)[:, None], (hi - lo)[None, :])
+    core = opposite & (d >= CORE_MIN_M) & (d <= params.max_wall_thickness_m) & (overlap >= CORE_OVERLAP_SHARE * shorter)
+    return core.any(axis=1)
+
+
 def _pilasters(rows: list[dict], params: WallParams) -> np.ndarray:
     """Rows of one story that stand out of a wall: pieces no longer than ``free_standing_m``
     in front of a longer wall facing the same way (within :data:`PILASTER_PARALLEL_DEG`), more
@@ -654,7 +688,8 @@ def find_flat_walls(mesh: Mesh, orientation: Orientation, params: WallParams | N
     any work surface; no counter or desk top attached behind its top edge; no surface facing
     the same way behind it. Each run is cut into straight pieces, each drawn in its own
     direction (not its cluster's, unless within ``snap_deg``); pieces of one plane are merged,
-    and free-standing objects (short, connected to no wall, floor behind them) dropped.
+    and free-standing objects (short, connected to no wall, floor behind them), pilasters and
+    the faces toward a wall's core (:func:`_wall_cores`) dropped.
 
     Parameters
     ----------
@@ -785,7 +820,7 @@ def find_flat_walls(mesh: Mesh, orientation: Orientation, params: WallParams | N
                 if present[j]
             )
         found = _merge(found, params.box_depth_m / 2, params.merge_gap_m)
-        free = _free_standing(found, raster, story.floor, ceiling, params) | _pilasters(found, params)
+        free = _free_standing(found, raster, story.floor, ceiling, params) | _pilasters(found, params) | _wall_cores(found, params)
         for r in (r for r, f in zip(found, free) if f):
             for sid in r["segments"]:
                 seg_kept[sid] = False
