@@ -341,3 +341,17 @@ def test_a_parametric_apartment_without_ceiling_stands_on_its_floor(seed):
     assert wrong and all(common_wall_span(scan.mesh, a, OrientParams()) < 0.5 * common_wall_span(scan.mesh, up, OrientParams()) for a in wrong)
     # a scanned mesh's faces span centimetres: the test says nothing there
     assert common_wall_span(generate(SynthParams(preset="room", seed=seed)).mesh, up, OrientParams()) == 0.0
+
+
+def test_walls_standing_below_the_floor_turn_a_weak_sign_over():
+    """A story without a ceiling whose walls stop below it, its furniture giving the sign of
+    up no clear lead (hard preset, seed 2, no open doors: evidence 0.08): up was taken
+    downward, the tops of the walls read as the floor, and the run stopped with "no floor
+    found". Walls stand on the floor: turned over, they do."""
+    scan = generate(SynthParams(preset="hard", seed=2, open_doors=False))
+    o = orient(scan.mesh)
+    gravity, _, _ = errors(o, scan.truth)
+    assert gravity < 0.5
+    assert o.gravity.sign_by == "walls on the floor"
+    with pytest.raises(GeometryError, match="no floor found"):  # the user's up is not overruled
+        orient(scan.mesh, OrientParams(), up_hint=-o.gravity.up)

@@ -182,7 +182,7 @@ class GravityEstimate:
     sign_evidence: float  # log-ratio of bottom to top occupancy; positive supports ``up``
     candidates: tuple[Candidate, ...]
     faces_used: int  # faces in the final cone of Method 2 (0 for Method 1)
-    sign_by: str = "furniture"  # what decided up from down: furniture, doors, file axes, up option
+    sign_by: str = "furniture"  # what decided up from down: furniture, doors, walls on the floor, file axes, up option
 
 
 def _story_intervals(h: FloatArray, horiz: np.ndarray, areas: FloatArray, params: OrientParams) -> list[tuple[float, float]]:

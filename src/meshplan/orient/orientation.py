@@ -104,15 +104,27 @@ def _check_scale(mesh: Mesh, params: OrientParams) -> None:
         raise GeometryError(problem, hint)
 
 
+#: What decided the sign of up weakly enough for the walls to overrule it (``sign_by`` of
+#: :class:`~meshplan.orient.gravity.GravityEstimate`): the furniture's low-against-high
+#: balance, or the file's axes when the furniture said nothing. The user's ``--up``, a hint, the
+#: format's or the device's declared up are not overruled.
+_OVERRULED_SIGNS = ("furniture", "file axes")
+
+
+def _wall_share_below(normals: FloatArray, heights: FloatArray, areas: FloatArray, floor: float, params: OrientParams) -> float:
+    """Share of the wall area lying more than 0.3 m below ``floor``."""
+    walls = np.abs(normals[:, 1]) < np.sin(np.radians(params.wall_exclusion_deg))
+    total = float(areas[walls].sum())
+    return float(areas[walls & (heights < floor - 0.3)].sum()) / total if total > 0 else 0.0
+
+
 def _check_floor(normals: FloatArray, heights: FloatArray, areas: FloatArray, floor: float, params: OrientParams) -> None:
     """Walls stand on the floor: when much of the wall area lies well below the lowest floor
     found, that "floor" is a table top or a ceiling, and the real floor is not in the scan."""
-    walls = np.abs(normals[:, 1]) < np.sin(np.radians(params.wall_exclusion_deg))
-    total = areas[walls].sum()
-    below = areas[walls & (heights < floor - 0.3)].sum()
-    if total > 0 and below > 0.25 * total:
+    below = _wall_share_below(normals, heights, areas, floor, params)
+    if below > 0.25:
         raise GeometryError(
-            f"no floor found: {100 * below / total:.0f} % of the wall area lies below the lowest horizontal surface",
+            f"no floor found: {100 * below:.0f} % of the wall area lies below the lowest horizontal surface",
             "make sure the scan includes the floor, or name the up axis with --up",
         )
 
@@ -173,6 +185,15 @@ def _orient(mesh: Mesh, params: OrientParams, up_hint: FloatArray | None, declar
             r_level, normals, centroids, levels = level(up)
     heights = centroids[:, 1]
     lowest = levels.stories[0].floor
+    if gravity.sign_by in _OVERRULED_SIGNS and _wall_share_below(normals, heights, areas, lowest, params) > 0.25:
+        # up points down: the "floor" is the top of the walls (a story without a ceiling, whose
+        # furniture gave the sign no clear lead). Walls stand on the floor: turned over, they do
+        flipped_level = level(-gravity.up)
+        f_heights = flipped_level[2][:, 1]
+        if _wall_share_below(flipped_level[1], f_heights, areas, flipped_level[3].stories[0].floor, params) <= 0.25:
+            gravity = replace(gravity, up=-gravity.up, rough_up=-gravity.rough_up, sign_evidence=-gravity.sign_evidence, sign_by="walls on the floor")
+            r_level, normals, centroids, levels = flipped_level
+            heights, lowest = f_heights, levels.stories[0].floor
     _check_floor(normals, heights, areas, lowest, params)
     highest = levels.stories[-1].ceiling
     alignment = align_walls(normals, areas, heights, lowest, highest, params)
