@@ -345,7 +345,7 @@ def test_a_parametric_apartment_without_ceiling_stands_on_its_floor(seed):
 
 def test_walls_standing_below_the_floor_turn_a_weak_sign_over():
     """A story without a ceiling whose walls stop below it, its furniture giving the sign of
-    up no clear lead (hard preset, seed 2, no open doors: evidence 0.08): up was taken
+    up no lead at all (hard preset, seed 2, no open doors: evidence 0.08): up was taken
     downward, the tops of the walls read as the floor, and the run stopped with "no floor
     found". Walls stand on the floor: turned over, they do."""
     scan = generate(SynthParams(preset="hard", seed=2, open_doors=False))

@@ -110,6 +110,13 @@ def _check_scale(mesh: Mesh, params: OrientParams) -> None:
 #: format's or the device's declared up are not overruled.
 _OVERRULED_SIGNS = ("furniture", "file axes")
 
+#: Below this sign evidence (a log-ratio, :func:`meshplan.orient.gravity.sign_evidence`) the
+#: furniture says nothing of up and down: the real scans, furnished, give 0.3-2.3 the right
+#: way up, empty buildings about 0. Only then do walls found below the floor turn the scan over;
+#: with more, a scan without its floor (walls and furniture under a ceiling) stays the right
+#: way up and is refused as one.
+_NO_SIGN_EVIDENCE = 0.3
+
 
 def _wall_share_below(normals: FloatArray, heights: FloatArray, areas: FloatArray, floor: float, params: OrientParams) -> float:
     """Share of the wall area lying more than 0.3 m below ``floor``."""
@@ -185,7 +192,11 @@ def _orient(mesh: Mesh, params: OrientParams, up_hint: FloatArray | None, declar
             r_level, normals, centroids, levels = level(up)
     heights = centroids[:, 1]
     lowest = levels.stories[0].floor
-    if gravity.sign_by in _OVERRULED_SIGNS and _wall_share_below(normals, heights, areas, lowest, params) > 0.25:
+    if (
+        gravity.sign_by in _OVERRULED_SIGNS
+        and abs(gravity.sign_evidence) < _NO_SIGN_EVIDENCE
+        and _wall_share_below(normals, heights, areas, lowest, params) > 0.25
+    ):
         # up points down: the "floor" is the top of the walls (a story without a ceiling, whose
         # furniture gave the sign no clear lead). Walls stand on the floor: turned over, they do
         flipped_level = level(-gravity.up)
