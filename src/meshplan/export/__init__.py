@@ -137,9 +137,10 @@ def _sheet(oriented: Oriented | Result, story: int) -> Sheet:
     return make_sheet(mesh.face_centroids[o.face_story == story][:, [0, 2]], oriented.options.render)
 
 
-def _jobs(result: Result) -> tuple[list[tuple], list[tuple]]:
+def _jobs(result: Result, workers: int = 2) -> tuple[list[tuple], list[tuple]]:
     """``(function, *arguments)`` of the drawings that need the walls and rooms (the drafting
-    plans, the wall segments), slowest first, and of the DXF files."""
+    plans, the wall segments), slowest first, for ``workers`` drawing workers, and of the DXF
+    files."""
     params = result.options.render
     n = len(result.stories)
     jobs: list[tuple] = []
@@ -149,10 +150,11 @@ def _jobs(result: Result) -> tuple[list[tuple], list[tuple]]:
         i = sp.story.index
         sheet = _sheet(result, i)
         symbols = sp.symbols
-        # the drafting plan is what the run waits for once its stages are done: its raster and
-        # its vector files are drawn by two workers at once (the figure is made by both, a
-        # tenth of the job; 0.25 s sooner on the 300k-face apartment)
-        for fmts in (("png",), ("svg", "pdf")):
+        # the drafting plan is what the run waits for once its stages are done: with two
+        # workers or more its raster and its vector files are drawn by two at once (the figure
+        # is made by both, a tenth of the job; 0.25 s sooner on the 300k-face apartment); with
+        # one worker or none the figure is made once for the three
+        for fmts in (("png",), ("svg", "pdf")) if workers > 1 else (("png", "svg", "pdf"),):
             jobs.append((_drafting_files, sp.drafting, sp.annotations, sheet, params, n, symbols, fmts, scan, north))
         jobs.append((_segments_files, result.mesh.face_centroids, result.walls, i, sheet, params, n))
         rooms = [r for r in result.rooms if r.story == i]
@@ -230,10 +232,18 @@ def _die_with_parent(parent: int) -> None:
 _WARM_UP_NICE = 10
 
 
-def _start_worker(parent: int) -> None:
+def _start_worker(parent: int, nice: bool = True) -> None:
     """A drawing worker's first steps: die with ``parent``, leave Ctrl-C to it, yield the CPU
-    to the process computing the stages (the drawings wait for it anyway), get the libraries
-    ready, then take the run's priority back for the drawings where the system allows it."""
+    to the process computing the stages (the drawings wait for it anyway) when ``nice``, get
+    the libraries ready, then take the run's priority back for the drawings where the system
+    allows it.
+
+    :class:`RenderPool` asks for ``nice`` only when the run and its workers outnumber the cores:
+    otherwise each has a core of its own, and the low priority would only yield the CPU to
+    other programs. On a machine other jobs kept busy, the one worker of a 2-core run, niced,
+    took 2.7-4.4 s to warm up (0.45 s of CPU) while the run computed its stages, then kept the
+    run waiting 2.2 s for its drawings.
+    """
     import signal
 
     # Ctrl-C reaches the whole process group: the run reports it in one line and stops the
@@ -243,10 +253,11 @@ def _start_worker(parent: int) -> None:
     signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
     _die_with_parent(parent)
     priority = os.getpriority(os.PRIO_PROCESS, 0)
-    try:
-        os.nice(_WARM_UP_NICE)
-    except OSError:  # pragma: no cover - not allowed here: run at the same priority
-        pass
+    if nice:
+        try:
+            os.nice(_WARM_UP_NICE)
+        except OSError:  # pragma: no cover - not allowed here: run at the same priority
+            pass
     _warm_up()
     # The low priority is for the warm-up alone: the drawings are what the run waits for once
     # its stages are done. Left at nice 10, on a machine other jobs keep busy the workers got a
@@ -282,7 +293,8 @@ def _warm_matplotlib() -> None:
 
 
 def _processes(params) -> int:
-    """Worker processes for the drawing jobs (forked: Linux only; elsewhere, none)."""
+    """Processes that draw (:class:`RenderPool`): the run itself and its workers (forked:
+    Linux only; elsewhere the run alone)."""
     if not sys.platform.startswith("linux"):
         return 1
     n = params.processes or min(os.cpu_count() or 1, 4)
@@ -293,17 +305,26 @@ class RenderPool:
     """Worker processes that draw the plans, started before there is anything to draw.
 
     :func:`meshplan.api.run` opens one when a run starts: the workers are forked while the
-    process is still small, and each gets matplotlib ready (:func:`_warm_up`, at low priority)
-    on the other cores while this process reads the scan and orients it. The drawings that need
-    the orientation alone (the pen-and-ink plans, the normals, the levels) are handed to them as
-    soon as it is known (:func:`submit_early`) and drawn while the walls and rooms are computed;
-    the drafting plans follow. The jobs get what they draw as arguments. With ``processes`` 1
-    (or off Linux) there are no workers and everything is drawn here.
+    process is still small, and each gets matplotlib ready (:func:`_warm_up`; at low priority
+    where the workers and the run outnumber the cores) on the other cores while this process
+    reads the scan and orients it. The drawings that need the orientation alone (the pen-and-ink
+    plans, the normals, the levels) are handed to them as soon as it is known (:func:`submit_early`) and drawn while the walls and rooms are computed;
+    the drafting plans follow. The jobs get what they draw as arguments.
+
+    ``processes`` counts the processes at work, this one included: ``processes - 1`` workers
+    draw while this process computes the stages and then makes the models and CAD files (one
+    process per core: on 2 cores, one worker). A second worker on 2 cores did not pay for
+    itself (issue 15): the run's stages keep one core busy, the two workers shared the other,
+    and each warmed matplotlib up (0.45 s of CPU) for the same drawings; with one worker the
+    300k-face apartment ran in the same wall time with 16 % less CPU (medians of 8 fresh runs,
+    interleaved). With ``processes`` 1 (or off Linux) there are no workers and everything is
+    drawn here.
     """
 
     def __init__(self, processes: int) -> None:
         self.executor = None
-        if processes > 1 and sys.platform.startswith("linux"):
+        self.workers = max(0, int(processes) - 1) if sys.platform.startswith("linux") else 0
+        if self.workers:
             import multiprocessing
             import signal
             from concurrent.futures import ProcessPoolExecutor
@@ -313,12 +334,15 @@ class RenderPool:
             blocked = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
             try:
                 self.executor = ProcessPoolExecutor(
-                    processes, mp_context=multiprocessing.get_context("fork"), initializer=_start_worker, initargs=(os.getpid(),)
+                    self.workers,
+                    mp_context=multiprocessing.get_context("fork"),
+                    initializer=_start_worker,
+                    initargs=(os.getpid(), self.workers + 1 > (os.cpu_count() or 1)),
                 )
                 self.executor.submit(int)  # fork the workers now (not at the first job)
             except OSError as exc:  # no processes left to fork: draw here
                 log.debug("no drawing workers (%s); drawing in this process", exc)
-                self.executor = None
+                self.executor, self.workers = None, 0
             finally:
                 signal.pthread_sigmask(signal.SIG_SETMASK, blocked)
 
@@ -441,7 +465,7 @@ def render_files(result: Result, timer: _Timer | None = None, pool: RenderPool |
         if pool is None:
             pool = stack.enter_context(RenderPool(_processes(result.options.render)))
         with stage("slice_draw"):
-            later, dxf = _jobs(result)
+            later, dxf = _jobs(result, pool.workers)
             if early is None:  # none under way: this result's own
                 jobs = _early_jobs(_oriented_of(result))
                 early = EarlyDrawings(jobs, _submit(pool, jobs))

@@ -70,8 +70,9 @@ class RenderParams:
     dpi
         Resolution of the PNG drawings and of the ink raster inside SVG and PDF.
     processes
-        Worker processes that draw the plans and build the models in parallel (Linux, forked);
-        0 is one per core, at most 4; 1 draws everything in the main process.
+        Processes that draw the plans and build the models in parallel (Linux, forked): the
+        run itself and ``processes - 1`` workers; 0 is one per core, at most 4 (on 2 cores, the
+        run and one worker); 1 draws everything in the main process.
     sheet
         Paper of the drawings: ``fit`` (a page fitted around the plan), ``auto`` (the smallest
         of :data:`AUTO_PAPER_METRIC` or, imperial, :data:`AUTO_PAPER_IMPERIAL` that holds the plan at its

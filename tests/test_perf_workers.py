@@ -1,0 +1,55 @@
+"""The drawing pool's shape on few cores (issue 15): the run counts as one of its drawing
+processes (on 2 cores, one worker beside it), one worker makes each drafting figure once for
+its three files, and every file is the same, byte for byte, whichever process makes it."""
+
+from __future__ import annotations
+
+import sys
+
+import pytest
+
+pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="drawing workers are forked on Linux only")
+
+
+def test_render_pool_counts_the_run_as_one_of_its_processes():
+    from meshplan.export import RenderPool
+
+    with RenderPool(1) as alone:
+        assert alone.executor is None and alone.workers == 0
+    with RenderPool(2) as one:
+        assert one.executor is not None and one.workers == 1
+        assert one.executor.submit(int).result(timeout=60) == 0
+        assert len(one.executor._processes) == 1
+    with RenderPool(3) as two:
+        assert two.workers == 2
+
+
+def test_drafting_figure_made_once_without_a_second_worker(computed):
+    """Two workers or more draw a drafting plan's raster and vector files at once (two jobs);
+    one worker, or the run alone, makes the figure once for the three."""
+    from meshplan import export
+
+    _, result = computed("apartment", 1)
+    for workers in (0, 1):
+        jobs, _ = export._jobs(result, workers)
+        assert [j[7] for j in jobs if j[0] is export._drafting_files] == [("png", "svg", "pdf")]
+    jobs, _ = export._jobs(result, 2)
+    assert [j[7] for j in jobs if j[0] is export._drafting_files] == [("png",), ("svg", "pdf")]
+
+
+def test_one_worker_makes_the_files_the_run_alone_makes(computed):
+    """With one worker every file is the one the run makes alone (and the one two workers
+    make, which split the drafting plan's formats), the report included (no timings here)."""
+    from meshplan.export import RenderPool, render_files
+
+    _, result = computed("apartment", 1)
+    with RenderPool(1) as alone:
+        here = render_files(result, pool=alone)
+    with RenderPool(2) as pool:
+        assert pool.workers == 1
+        there = render_files(result, pool=pool)
+    with RenderPool(3) as pool:
+        split = render_files(result, pool=pool)
+    assert sorted(here) == sorted(there) == sorted(split)
+    for name in here:
+        assert here[name] == there[name] == split[name], name
