@@ -178,3 +178,28 @@ def test_a_parametric_apartment_without_ceiling(computed, seed):
     # recall 1.0, precision 0.72, the rest being the outward faces of the exterior walls,
     # which a parametric model has and a scan never shows (issue 9, open)
     assert walls["recall"] >= 0.95 and walls["precision"] >= 0.7, walls
+
+
+#: Issue 9 item 8's bounds on the synthetic hard cases (wall F1 >= 0.95, room recall >= 0.95,
+#: median area error <= 0.5 %), not met yet: the test xfails with the reason while they are not,
+#: and passes once they are.
+HARD_BOUND_MISSED = {
+    "hard": "door leaves at angles drawn as short walls, built-in wardrobes as wall boxes, doors unseen (their heads "
+    "above the scanned wall tops): F1 0.74-0.89, room precision 0.56-0.75, median area error 2.4-4.4 % on seeds 1-3",
+    "hard-ceiling": "walls scanned only to 1.4-2.0 m under a scanned 2.75 m ceiling are not taken for walls "
+    "(the reach test; the edge rule needs 2.1 m): F1 0 on seeds 1-2",
+}
+
+
+@pytest.mark.parametrize("case", sorted(HARD_BOUND_MISSED))
+def test_the_hard_synthetic_cases_meet_the_issue_bounds(computed, case):
+    kw = {"drop_ceiling": False} if case == "hard-ceiling" else {}
+    scan, result = computed("hard", 1, **kw)
+    report = evaluate(plan_document(result), scan.truth)
+    ok = (
+        report["walls"]["f1"] >= 0.95
+        and report["rooms"]["found_fraction"] >= 0.95
+        and (report["rooms"]["median_abs_error_pct"] or 100.0) <= 0.5
+    )
+    if not ok:
+        pytest.xfail(HARD_BOUND_MISSED[case])
