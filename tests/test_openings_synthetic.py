@@ -125,3 +125,21 @@ def test_a_window_whose_frame_a_scan_hole_runs_into_is_found(computed):
     scan, result = computed("apartment", 8)
     found, true, matched = _score(plan_document(result), scan.truth, "window")
     assert matched == true == found, (found, true, matched)
+
+
+def test_the_largest_rectangle_is_the_largest():
+    """Against every rectangle of 200 random boxes: the area is the largest, its cells all
+    empty (True)."""
+    from meshplan.plan.doors import _largest_rectangle
+
+    rng = np.random.default_rng(0)
+    for _ in range(200):
+        box = rng.random((int(rng.integers(1, 8)), int(rng.integers(1, 8)))) < rng.uniform(0.3, 0.95)
+        rows, cols = box.shape
+        best = max(
+            ((r1 - r0) * (c1 - c0) for r0 in range(rows) for r1 in range(r0 + 1, rows + 1) for c0 in range(cols) for c1 in range(c0 + 1, cols + 1) if box[r0:r1, c0:c1].all()),
+            default=0,
+        )
+        r0, r1, c0, c1 = _largest_rectangle(box)
+        assert (r1 - r0) * (c1 - c0) == best
+        assert box[r0:r1, c0:c1].all()

@@ -182,19 +182,9 @@ class Mesh:
 
     def with_flipped(self, flip: ArrayLike) -> Mesh:
         """The mesh with the winding (and so the normal) of the selected faces reversed (their
-        corners and cross products, when computed, carried over: reversed and negated)."""
-        flip = np.asarray(flip, dtype=bool)
-        faces = self.faces.copy()
-        faces[flip] = faces[flip][:, ::-1]
-        out = Mesh(self.vertices, faces)
-        cached = self.__dict__
-        if "triangles" in cached and "_cross" in cached:
-            tri = cached["triangles"].copy()
-            tri[flip] = tri[flip][:, ::-1]
-            cross = cached["_cross"].copy()
-            cross[flip] *= -1.0
-            out._seed(triangles=tri, _cross=cross)
-        return out
+        corners and cross products, when computed, carried over: reversed and negated):
+        :meth:`transformed` by the identity."""
+        return self.transformed(np.eye(4), flip)
 
     @staticmethod
     def concatenate(meshes: list[Mesh]) -> Mesh:

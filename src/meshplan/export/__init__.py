@@ -308,8 +308,9 @@ class RenderPool:
     process is still small, and each gets matplotlib ready (:func:`_warm_up`; at low priority
     where the workers and the run outnumber the cores) on the other cores while this process
     reads the scan and orients it. The drawings that need the orientation alone (the pen-and-ink
-    plans, the normals, the levels) are handed to them as soon as it is known (:func:`submit_early`) and drawn while the walls and rooms are computed;
-    the drafting plans follow. The jobs get what they draw as arguments.
+    plans, the normals, the levels) are handed to them as soon as it is known
+    (:func:`submit_early`) and drawn while the walls and rooms are computed; the drafting plans
+    follow. The jobs get what they draw as arguments.
 
     ``processes`` counts the processes at work, this one included: ``processes - 1`` workers
     draw while this process computes the stages and then makes the models and CAD files (one

@@ -118,18 +118,27 @@ _OVERRULED_SIGNS = ("furniture", "file axes")
 _NO_SIGN_EVIDENCE = 0.3
 
 
+#: Wall area lies below a floor when it lies deeper than this under it (m): more than a sunken
+#: floor's step or a floor's scatter.
+_BELOW_FLOOR_M = 0.3
+
+#: A "floor" with more than this share of the wall area below it is no floor: walls stand on
+#: theirs (a table top or a ceiling taken for the floor).
+_MAX_WALL_SHARE_BELOW = 0.25
+
+
 def _wall_share_below(normals: FloatArray, heights: FloatArray, areas: FloatArray, floor: float, params: OrientParams) -> float:
-    """Share of the wall area lying more than 0.3 m below ``floor``."""
+    """Share of the wall area lying more than :data:`_BELOW_FLOOR_M` below ``floor``."""
     walls = np.abs(normals[:, 1]) < np.sin(np.radians(params.wall_exclusion_deg))
     total = float(areas[walls].sum())
-    return float(areas[walls & (heights < floor - 0.3)].sum()) / total if total > 0 else 0.0
+    return float(areas[walls & (heights < floor - _BELOW_FLOOR_M)].sum()) / total if total > 0 else 0.0
 
 
 def _check_floor(normals: FloatArray, heights: FloatArray, areas: FloatArray, floor: float, params: OrientParams) -> None:
     """Walls stand on the floor: when much of the wall area lies well below the lowest floor
     found, that "floor" is a table top or a ceiling, and the real floor is not in the scan."""
     below = _wall_share_below(normals, heights, areas, floor, params)
-    if below > 0.25:
+    if below > _MAX_WALL_SHARE_BELOW:
         raise GeometryError(
             f"no floor found: {100 * below:.0f} % of the wall area lies below the lowest horizontal surface",
             "make sure the scan includes the floor, or name the up axis with --up",
@@ -195,16 +204,15 @@ def _orient(mesh: Mesh, params: OrientParams, up_hint: FloatArray | None, declar
     if (
         gravity.sign_by in _OVERRULED_SIGNS
         and abs(gravity.sign_evidence) < _NO_SIGN_EVIDENCE
-        and _wall_share_below(normals, heights, areas, lowest, params) > 0.25
+        and _wall_share_below(normals, heights, areas, lowest, params) > _MAX_WALL_SHARE_BELOW
     ):
         # up points down: the "floor" is the top of the walls (a story without a ceiling, whose
-        # furniture gave the sign no clear lead). Walls stand on the floor: turned over, they do
-        flipped_level = level(-gravity.up)
-        f_heights = flipped_level[2][:, 1]
-        if _wall_share_below(flipped_level[1], f_heights, areas, flipped_level[3].stories[0].floor, params) <= 0.25:
+        # furniture gave the sign no lead). Walls stand on the floor: turned over, they do
+        r_over, n_over, c_over, levels_over = level(-gravity.up)
+        if _wall_share_below(n_over, c_over[:, 1], areas, levels_over.stories[0].floor, params) <= _MAX_WALL_SHARE_BELOW:
             gravity = replace(gravity, up=-gravity.up, rough_up=-gravity.rough_up, sign_evidence=-gravity.sign_evidence, sign_by="walls on the floor")
-            r_level, normals, centroids, levels = flipped_level
-            heights, lowest = f_heights, levels.stories[0].floor
+            r_level, normals, centroids, levels = r_over, n_over, c_over, levels_over
+            heights, lowest = centroids[:, 1], levels.stories[0].floor
     _check_floor(normals, heights, areas, lowest, params)
     highest = levels.stories[-1].ceiling
     alignment = align_walls(normals, areas, heights, lowest, highest, params)

@@ -223,10 +223,10 @@ def _sides_on_the_floor(rect: Polygon, core: Polygon, limit_m: float) -> Polygon
         return rect
     eb, ed = b / la, d / ld
     steps = np.arange(0.0, min(limit_m, 0.45 * min(la, ld)) + 1e-9, SIDE_STEP_M)
-    # for each side: its line moved in by each step, across the whole rectangle
+    # for each side (its first corner, the way in, its direction, its length): its line moved
+    # in by each step, across the whole rectangle
     cut = []
-    for along, e_move, e_line, span in ((0.0, ed, eb, la), (ld, -ed, eb, la), (0.0, eb, ed, ld), (la, -eb, ed, ld)):
-        base = a + (along * (ed if e_line is eb else eb))
+    for base, e_move, e_line, span in ((a, ed, eb, la), (a + ld * ed, -ed, eb, la), (a, eb, ed, ld), (a + la * eb, -eb, ed, ld)):
         starts = base[None, :] + steps[:, None] * e_move[None, :]
         lines = shapely.linestrings(np.stack([starts, starts + span * e_line[None, :]], axis=1))
         cover = shapely.length(shapely.intersection(lines, core)) / span

@@ -757,22 +757,24 @@ def _windows(f: _Frame, walls: FlatWalls, params: PlanParams) -> list[Candidate]
 
 def _largest_rectangle(box: np.ndarray) -> tuple[int, int, int, int]:
     """``(r0, r1, c0, c1)``: the largest axis-aligned rectangle of True cells in ``box``
-    (rows ``[r0, r1)``, columns ``[c0, c1)``), by the histogram of each row's runs upward."""
+    (rows ``[r0, r1)``, columns ``[c0, c1)``; the first in order of left column, bottom row
+    and width among equals). Each cell's run of True cells upward, then, for each left column,
+    the running minimum of those runs to its right: a loop over rows and one over columns, each
+    step over whole arrays."""
     nrow, ncol = box.shape
-    heights = np.zeros(ncol, np.int64)
-    best, out = 0, (0, 0, 0, 0)
+    up = np.zeros((nrow, ncol), np.int64)  # True cells upward from each cell, itself included
+    run = np.zeros(ncol, np.int64)
     for r in range(nrow):
-        heights = np.where(box[r], heights + 1, 0)
-        stack: list[int] = []
-        for c in range(ncol + 1):
-            h = int(heights[c]) if c < ncol else 0
-            while stack and int(heights[stack[-1]]) >= h:
-                top = stack.pop()
-                left = stack[-1] + 1 if stack else 0
-                area = int(heights[top]) * (c - left)
-                if area > best:
-                    best, out = area, (r + 1 - int(heights[top]), r + 1, left, c)
-            stack.append(c)
+        run = np.where(box[r], run + 1, 0)
+        up[r] = run
+    best, out = 0, (0, 0, 0, 0)
+    for c0 in range(ncol):
+        height = np.minimum.accumulate(up[:, c0:], axis=1)  # (nrow, widths): the tallest fit
+        area = height * np.arange(1, ncol - c0 + 1)
+        k = int(np.argmax(area))
+        if area.flat[k] > best:
+            r, w = divmod(k, ncol - c0)
+            best, out = int(area.flat[k]), (r + 1 - int(height[r, w]), r + 1, c0, c0 + w + 1)
     return out
 
 
