@@ -10,7 +10,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from meshplan.plan.doors import DOOR_HEAD_MAX_M, _doors, _Frame
+from meshplan.plan.doors import DOOR_HEAD_ASSUMED_M, DOOR_HEAD_MAX_M, HEAD_UNSEEN_MIN_TOP_M, _doors, _Frame
 from meshplan.plan.params import PlanParams
 
 CELL = 0.05
@@ -153,3 +153,42 @@ def test_a_leaf_flush_with_the_wall_is_no_door() -> None:
     wall: only the drifted wall's door is found."""
     walls, op, _ = _built_openings(0.02)
     assert [k for k in op.kind].count("door") == 1
+
+
+# ------------------------------------------------------------------------- heads not scanned
+
+
+def _headless(wall_top_m: float, jamb_top_m: float | None = None) -> list:
+    """A 3 m face scanned from the floor up to ``wall_top_m`` only (nothing above: the band
+    under the ceiling a user who does not look up never scans), with a gap from 1.0 to 1.85 m
+    running up into that band; its jambs rise to ``jamb_top_m`` (default: the wall's top)."""
+    f = _frame(CEILING)
+    grid = f.grid.copy()
+    top_row = int(round(wall_top_m / CELL))
+    grid[top_row : grid.shape[0] - f.margin] = False
+    if jamb_top_m is not None:  # the wall lower beside the gap: a hole, not a doorway
+        c0, c1 = int(round(1.0 / CELL)), int(round(1.85 / CELL))
+        grid[int(round(jamb_top_m / CELL)) : top_row, c0 - 4 : c0] = False
+        grid[int(round(jamb_top_m / CELL)) : top_row, c1 : c1 + 4] = False
+    grid[grid.shape[0] - f.margin :] = True
+    walls = SimpleNamespace(u_min=np.array([0.0]), u_max=np.array([3.0]))
+    return _doors(_Frame(grid, f.lo, f.floor, f.ceiling, f.cell, f.margin, f.vu, f.vy, 0, False, False), walls, np.ones(grid.shape[1]), PlanParams())
+
+
+@pytest.mark.parametrize("wall_top_m", [1.4, 1.75, 2.0])
+def test_a_gap_whose_head_was_not_scanned_is_a_door(wall_top_m):
+    """The synthetic hard preset's walls are scanned to 1.4-2.0 m: a gap from the floor up to
+    the wall's scanned top, with the floor beyond, is a door whose head is assumed."""
+    (door,) = _headless(wall_top_m)
+    assert door.how == "head unseen" and door.top == pytest.approx(DOOR_HEAD_ASSUMED_M)
+    assert door.u_max - door.u_min == pytest.approx(0.85, abs=CELL)
+
+
+def test_a_gap_in_a_wall_scanned_no_higher_than_the_work_surfaces_is_no_door():
+    """A counter run scanned to 1.1 m with a gap between two units is no doorway."""
+    assert HEAD_UNSEEN_MIN_TOP_M > 1.1 and _headless(1.1) == []
+
+
+def test_a_gap_lower_than_the_wall_beside_it_is_no_headless_door():
+    """Jambs that stop 40 cm below the wall's scanned top: a hole in the scan, not a doorway."""
+    assert _headless(1.8, jamb_top_m=1.4) == []

@@ -19,6 +19,7 @@ from .orient import assign_faces
 from .orient.stories import without_ceiling
 from .plan import drafting, find_openings, find_rooms, find_stairs, pen_and_ink
 from .plan.elements import ModelName, RoomEdit, mark_low_confidence, name_rooms, opening_elements, section_names, type_rooms, wall_elements
+from .plan.openings import door_leaves
 from .plan.parametric import apply_parametric
 from .plan.stairs import attach_rooms
 from .plan.symbols import plan_symbols
@@ -188,6 +189,12 @@ def _compute(
         if stats.parametric is not None:  # a RoomPlan export: its own doors, windows, furniture
             p = apply_parametric(stats.parametric, stats.scale_to_m, plan_mesh, orientation, walls, physical, openings, options.walls)
             walls, physical, openings = p.walls, p.physical, p.openings
+        # the leaves of open doors were found as short walls at an angle: they are no walls
+        leaves = door_leaves(walls, openings, options.plan)
+        if leaves.any():
+            walls, renumbered = walls.without(leaves)
+            openings = openings.reindexed(renumbered)
+            physical = physical_walls(walls, options.walls.max_wall_thickness_m, options.walls.default_wall_thickness_m)
         rooms = find_rooms(plan_mesh, orientation, walls, options.plan, options.orient.slab_tolerance_m)
         # building elements: walls meeting at their centre lines, rooms numbered and named,
         # what each wall and opening joins, types and confidences

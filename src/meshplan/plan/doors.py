@@ -154,6 +154,21 @@ MAX_DOOR_WALL_M = 0.3
 #: between wall and ceiling, a bulkhead or a scan hole; a passage that high has no leaf).
 DOOR_HEAD_MAX_M = 2.4
 
+#: A gap whose jambs end where the wall beside them ends (the scan stopped there: a user who did
+#: not look up scans walls to 1.4-2.0 m) has its head in unscanned space. It is a door when that
+#: wall rises at least this high above the floor (m): above every work surface (bar counters
+#: 1.1-1.2 m, ``WallParams.max_work_surface_m``), so that a gap between two counter or desk
+#: fronts with the floor beyond is none.
+HEAD_UNSEEN_MIN_TOP_M = 1.2
+
+#: How far along the wall beside each jamb (m) the wall's own scanned top is read, for
+#: :data:`HEAD_UNSEEN_MIN_TOP_M`: about a door's width, within the one room the jamb is seen from.
+HEAD_UNSEEN_CONTEXT_M = 1.0
+
+#: Head given to a door whose head was not scanned (m above its floor): a standard leaf (1.98-2.03 m,
+#: 6 ft 8 in) in its frame.
+DOOR_HEAD_ASSUMED_M = 2.05
+
 #: Cells (of ``opening_cell_m``) an edge may stray from its median and still be straight, and
 #: the tolerance of the size tests: the grid's own quantization and the closing.
 EDGE_CELLS = 2
@@ -172,7 +187,10 @@ class Candidate:
     u_max: float
     bottom: float
     top: float
-    how: str  # "gap", "no lintel" (the scan missed the lintel), "corner", "panel", "recess" (glazing set back) or "leaf" (a closed leaf set back)
+    #: "gap", "no lintel" (the scan missed the lintel), "head unseen" (the scan stopped below the
+    #: head, with the wall's top), "corner", "panel", "recess" (glazing set back) or "leaf" (a
+    #: closed leaf set back)
+    how: str
 
 
 class WallEvidence:
@@ -195,6 +213,9 @@ class WallEvidence:
         tri = np.ascontiguousarray(self.tri)
         centres = np.broadcast_to(np.ascontiguousarray(self.centroids)[:, None, :], tri.shape)
         self.radius = max_corner_distance(tri, centres, 0) if len(tri) else np.zeros(0)
+        # the wall face each face of the mesh was found in (-1: none)
+        fw = walls.face_walls()
+        self.face_wall = fw if len(fw) == len(tri) else np.full(len(tri), -1, dtype=np.int64)
         self._cache: dict[tuple, tuple[FloatArray, IntArray, IntArray]] = {}
         self._panels: tuple[IntArray, IntArray] | None = None
         self._vertical_normals: FloatArray | None = None
@@ -395,6 +416,10 @@ def _gaps(ev: WallEvidence, w: int, floor: float, ceiling: float) -> list[Candid
 
     # triangles of the slab that face along the wall's normal
     cand = ev.near(ev.facing(w, (far, near), (lo, hi)), n3, t3, off, (far, near), (lo, hi), (floor, ceiling))
+    # a face found in another wall that turns from this one (a door leaf standing open a little,
+    # whose faces near the hinge reach into the slab; a return) is no evidence of this wall
+    other = ev.face_wall[cand]
+    cand = cand[(other < 0) | (np.abs(walls.normal[np.maximum(other, 0)] @ walls.normal[w]) >= np.cos(np.radians(COLLINEAR_DOOR_DEG)))]
     tv = ev.tri[cand]
     d = tv @ n3 - off
     u = tv @ t3
@@ -700,15 +725,19 @@ def _doors(f: _Frame, walls: FlatWalls, floor_cols: np.ndarray, params: PlanPara
             if np.mean(np.abs(heads - top) <= tol) < params.opening_edge_straightness:
                 continue  # a ragged top: a hole in the scan, not a lintel
         elif not closed.any():
-            # no lintel scanned: the wall beside the gap rises above any door head, and the
-            # floor runs on through the gap beyond the wall
-            jamb_top = min(col_top[lj[0]], col_top[rj[0]])
-            if jamb_top < min(f.floor + DOOR_HEAD_MAX_M, f.ceiling - params.opening_margin_m - tol):
-                continue
+            # no lintel scanned, and the floor runs on through the gap beyond the wall: either
+            # the wall beside the gap rises above any door head (the scan missed the lintel),
+            # or the jambs rise as high as the wall beside them was scanned, above the work
+            # surfaces (the head is in the unscanned band over the wall's top)
             if floor_cols[run].mean() < params.door_floor_beyond:
                 continue
-            top = f.ceiling
-            how = "no lintel"
+            jamb_top = min(col_top[lj[0]], col_top[rj[0]])
+            if jamb_top >= min(f.floor + DOOR_HEAD_MAX_M, f.ceiling - params.opening_margin_m - tol):
+                top, how = f.ceiling, "no lintel"
+            elif jamb_top - f.floor >= HEAD_UNSEEN_MIN_TOP_M and _jambs_reach_wall_top(f, col_top, lj[0], rj[0]):
+                top, how = min(f.ceiling, f.floor + DOOR_HEAD_ASSUMED_M), "head unseen"
+            else:
+                continue
         else:
             continue
         left, right = _refine(f, left, right, f.floor + params.opening_margin_m, min(top, f.floor + params.door_height_m))
@@ -718,12 +747,33 @@ def _doors(f: _Frame, walls: FlatWalls, floor_cols: np.ndarray, params: PlanPara
             how = "corner"
         across = (f.vu > left + tol) & (f.vu < right - tol)
         tv = f.vy[across & (f.vy >= top - tol) & (f.vy <= top + tol)]
-        if how != "no lintel" and len(tv):
+        if how not in ("no lintel", "head unseen") and len(tv):
             top = float(tv.min())
-        if how != "no lintel" and top > f.floor + DOOR_HEAD_MAX_M:
+        if how not in ("no lintel", "head unseen") and top > f.floor + DOOR_HEAD_MAX_M:
             continue  # a lintel higher than any door's head
         out.append(Candidate("door", f.wall, left, right, f.floor, top, how))
     return out
+
+
+def _jambs_reach_wall_top(f: _Frame, col_top: FloatArray, left: int, right: int) -> bool:
+    """Whether the wall at each jamb (the columns ``left`` and ``right`` and the
+    :data:`EDGE_CELLS` next to them in the wall, for the rounded or decimated corner of a jamb)
+    rises within :data:`EDGE_CELLS` cells of the top of the wall scanned beside it (the highest
+    column within :data:`HEAD_UNSEEN_CONTEXT_M` on its side, the columns a corner closes left
+    out): the gap's edges are the wall's full scanned height, not a hole lower in it."""
+    k = max(1, int(np.ceil(HEAD_UNSEEN_CONTEXT_M / f.cell)))
+    first = EDGE_CELLS if f.left_corner else 0
+    stop = len(col_top) - EDGE_CELLS if f.right_corner else len(col_top)
+    tol = EDGE_CELLS * f.cell
+
+    def top(a: int, b: int) -> float:
+        a, b = max(a, first), min(b, stop)
+        return float(col_top[a:b].max()) if b > a else -np.inf
+
+    return (
+        top(left - EDGE_CELLS, left + 1) >= top(left - k, left + 1) - tol
+        and top(right, right + EDGE_CELLS + 1) >= top(right, right + k + 1) - tol
+    )
 
 
 def _windows(f: _Frame, walls: FlatWalls, params: PlanParams) -> list[Candidate]:

@@ -31,6 +31,7 @@ import numpy as np
 from ..geometry import FloatArray, IntArray, Mesh
 from ..orient import Orientation
 from ..walls import FlatWalls, PhysicalWall, WallParams, physical_walls
+from ..walls.flat import segment_distances
 from .doors import Candidate, WallEvidence, wall_candidates
 from .params import PlanParams
 
@@ -88,6 +89,31 @@ class Openings:
             for face, u0, u1, b, t in cuts:
                 out.setdefault(int(face), []).append((u0, u1, b, t))
         return out
+
+    def reindexed(self, new_index: IntArray) -> Openings:
+        """The openings on walls renumbered by ``new_index`` (old wall -> new, -1 where the wall
+        was dropped, :meth:`meshplan.walls.FlatWalls.without`): an opening whose listed wall was
+        dropped is dropped, and a dropped face is no longer cut."""
+        keep = np.flatnonzero(new_index[self.wall] >= 0) if len(self) else np.zeros(0, np.int64)
+
+        def per_row(values: tuple) -> tuple:
+            return tuple(values[i] for i in keep) if values else ()
+
+        faces = tuple(
+            tuple((int(new_index[f]), *rest) for f, *rest in cuts if new_index[f] >= 0) for cuts in per_row(self.faces)
+        )
+        return Openings(
+            story=self.story[keep],
+            kind=tuple(self.kind[i] for i in keep),
+            wall=new_index[self.wall[keep]],
+            u_min=self.u_min[keep],
+            u_max=self.u_max[keep],
+            bottom=self.bottom[keep],
+            top=self.top[keep],
+            faces=faces,
+            source=per_row(self.source),
+            closed=per_row(self.closed),
+        )
 
     def to_list(self, walls: FlatWalls, ndigits: int = 4) -> list[dict]:
         c = self.center(walls)
@@ -161,6 +187,70 @@ def find_openings(
         faces=tuple(r[6] for r in rows),
         closed=tuple(bool(r[7]) for r in rows),
     )
+
+
+#: A door leaf standing open turns from its wall by at least this angle (degrees); a leaf
+#: nearer to closed lies in the wall's plane and is part of the wall's face, or the door's.
+LEAF_MIN_TURN_DEG = 10.0
+#: A leaf's hinge lies this close (m) to the flat wall found on the leaf: the hinge stands on a
+#: jamb of the door, on either face of the wall, and that flat wall stops 5-15 cm short of it
+#: where the scan rounds the corner between leaf and frame.
+LEAF_HINGE_M = 0.2
+#: A leaf's free end meets no other wall within this distance (m): a return wall or a closet's
+#: side beside a door, as short as a leaf, meets the wall across at its far end.
+LEAF_FREE_END_M = 0.15
+
+
+def door_leaves(walls: FlatWalls, openings: Openings, params: PlanParams | None = None) -> np.ndarray:
+    """``(W,)`` which flat walls are the leaves of doors standing open, not walls.
+
+    A door leaf open by :data:`LEAF_MIN_TURN_DEG` or more is a vertical panel as tall as a
+    door, and the wall stage takes it for a short wall at an angle (drawn across the room it
+    opens into, it splits that room). It is a leaf of a door found in a wall when it turns from
+    that wall, passes within :data:`LEAF_HINGE_M` of one of the door's jambs (the line across
+    the wall's depth at either side of the door, where the hinge stands on one face), lies
+    within the door's width of that jamb (inside the leaf's swing), and its end away from the
+    jamb meets no other wall (:data:`LEAF_FREE_END_M`): a short return or a closet's side beside
+    a door meets the wall across.
+    """
+    params = params or PlanParams()
+    out = np.zeros(len(walls), dtype=bool)
+    if not len(walls) or not len(openings):
+        return out
+    start, end = walls.start, walls.end
+    cos_turn = np.cos(np.radians(LEAF_MIN_TURN_DEG))
+    front, back = params.opening_slab_m, params.opening_wall_depth_m + params.opening_slab_m
+    for i in np.flatnonzero(np.array(openings.kind) == "door"):
+        f = int(openings.wall[i])
+        n, t, off = walls.normal[f], walls.tangent[f], float(walls.offset[f])
+        width = float(openings.u_max[i] - openings.u_min[i])
+        # the two jambs, each across the wall's depth (the slab the door was found in)
+        jamb_s = np.array([u * t + (off + front) * n for u in (openings.u_min[i], openings.u_max[i])])
+        jamb_e = np.array([u * t + (off - back) * n for u in (openings.u_min[i], openings.u_max[i])])
+        story = walls.story == openings.story[i]
+        turned = np.abs(walls.normal @ n) < cos_turn
+        # the door's own wall: parallel faces within its depth
+        mid = 0.5 * (start + end)
+        own = ~turned & (mid @ n - off <= front + 1e-9) & (mid @ n - off >= -back - 1e-9)
+        cand = np.flatnonzero(story & turned & ~out)
+        if not len(cand):
+            continue
+        hinge = segment_distances(start[cand], end[cand], jamb_s, jamb_e)  # (candidates, 2 jambs)
+        for k, L in enumerate(cand):
+            j = int(np.argmin(hinge[k]))
+            if hinge[k, j] > LEAF_HINGE_M:
+                continue
+            ends = np.array([start[L], end[L]])
+            reach = segment_distances(ends, ends, jamb_s[j : j + 1], jamb_e[j : j + 1])[:, 0]
+            if reach.max() > width + LEAF_HINGE_M:
+                continue
+            free = ends[int(np.argmax(reach))]
+            # other walls the free end may meet: not the door's own wall, not a face parallel
+            # to this one (the leaf's other face)
+            others = story & ~own & (np.abs(walls.normal @ walls.normal[L]) < cos_turn)
+            if not np.any(segment_distances(free[None], free[None], start[others], end[others]) <= LEAF_FREE_END_M):
+                out[L] = True
+    return out
 
 
 def _along(walls: FlatWalls, src: int, dst: int, u: float) -> float:

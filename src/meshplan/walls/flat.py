@@ -28,7 +28,7 @@ evidence lives in :mod:`~meshplan.walls.evidence`.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.special import stdtrit  # Student t quantiles, without importing scipy.stats (0.4 s)
@@ -90,10 +90,16 @@ CONNECT_M = 0.3
 FLOOR_BEHIND_SHARE = 0.5
 
 #: Deepest protrusion of a pilaster (m; :func:`_pilasters`): pilasters, engaged columns, chimney
-#: breasts and the wardrobes and cupboards that stand against a wall stand out of it by 0.1-0.6 m;
-#: a room behind a wall, or a corridor, lies deeper, and a step of a wall has the wall behind it
-#: on one side only.
-PILASTER_DEPTH_M = 0.6
+#: breasts and the wardrobes and cupboards that stand against a wall stand out of it by 0.1-0.65 m
+#: (fitted wardrobes and kitchen units are 0.6 m deep, plus a door's or a worktop's overhang and
+#: the scan's noise); a room behind a wall, or a corridor, lies deeper (0.8 m and more), and a
+#: step of a wall has the wall behind it on one side only.
+PILASTER_DEPTH_M = 0.7
+
+#: Longest front standing out of a wall that is taken for a cupboard or a wardrobe against it
+#: (m; :func:`_pilasters`): free-standing wardrobes and cupboard runs are 1.0-2.4 m wide. A
+#: longer piece in front of a wall is a wall of its own (a lining, the wall of a corridor).
+BUILT_IN_FRONT_M = 2.4
 
 #: A piece of wall and the wall behind it face the same way when their directions differ by at
 #: most this angle (degrees): a wall drifted by the scanner over its length bends by 3-8 degrees.
@@ -176,6 +182,19 @@ class FlatWalls:
         ok = seg >= 0
         out[ok] = self.segment_wall[seg[ok]]
         return out
+
+    def without(self, drop: np.ndarray) -> tuple[FlatWalls, IntArray]:
+        """These walls without the rows where ``drop`` is true, and the new index of every old
+        row (-1 where dropped); the segments of the dropped rows are kept as dropped segments
+        (for the segment drawings)."""
+        keep = ~np.asarray(drop, dtype=bool)
+        new_index = np.where(keep, np.cumsum(keep) - 1, -1).astype(np.int64)
+        seg_wall = np.where(self.segment_wall >= 0, new_index[np.maximum(self.segment_wall, 0)], -1) if len(self) else self.segment_wall
+        rows = {
+            name: getattr(self, name)[keep]
+            for name in ("story", "direction", "normal", "offset", "u_min", "u_max", "bottom", "top", "support", "area")
+        }
+        return replace(self, **rows, segment_kept=self.segment_kept & (seg_wall >= 0), segment_wall=seg_wall), new_index
 
     def mesh(self, story: int | None = None, holes: dict[int, list[tuple[float, float, float, float]]] | None = None) -> Mesh:
         """The mesh replacement: two triangles per rectangle, normals into the rooms.
@@ -417,19 +436,55 @@ def _absorb(o: dict, r: dict) -> None:
     o["segments"] = o["segments"] + r["segments"]
 
 
+#: A wall crosses the gap between two coplanar pieces when it meets their line this far (m) or
+#: more inside the gap from both of its ends: the pieces then lie in two rooms on either side of
+#: that wall, not on either side of a door. Nearer to an end it is a jamb's own return, or the
+#: leaf of a door standing at its jamb.
+CROSSING_INSIDE_M = 0.1
+
+
+def _crossed(o: dict, r: dict, walls: tuple[FloatArray, FloatArray]) -> bool:
+    """Whether one of ``walls`` (plan ends ``(starts, ends)``, extended by :data:`CONNECT_M` at
+    each end: scans leave corners open) crosses the line of pieces ``o`` and ``r`` inside the gap
+    between them (:data:`CROSSING_INSIDE_M`)."""
+    if not len(walls[0]):
+        return False
+    n = np.asarray(o["normal"])
+    t = np.array([-n[1], n[0]])
+    (a0, a1), (b0, b1) = sorted((sorted(np.array(_ends(o)) @ t), sorted(np.array(_ends(r)) @ t)))
+    lo, hi = a1 + CROSSING_INSIDE_M, b0 - CROSSING_INSIDE_M
+    if hi <= lo:  # no gap (or too short a one for a wall to stand in)
+        return False
+    s, e = walls
+    d = e - s
+    dn = d @ n
+    across = d @ t
+    ok = np.abs(dn) > 1e-9
+    k = np.where(ok, (o["offset"] - s @ n) / np.where(ok, dn, 1.0), np.inf)  # where each meets the line
+    reach = CONNECT_M / np.maximum(np.linalg.norm(d, axis=1), 1e-9)
+    u = s @ t + k * across
+    return bool(np.any(ok & (k >= -reach) & (k <= 1 + reach) & (u >= lo) & (u <= hi)))
+
+
 def _merge(rows: list[dict], depth_half: float, gap: float) -> list[dict]:
     """Merge the rectangles of one story that are pieces of one plane (see :func:`_mergeable`):
     coplanar pieces on either side of a door, and the same wall found in two overlapping
-    wall directions."""
+    wall directions; but not pieces on either side of a wall that crosses the gap between them
+    (:func:`_crossed`: they belong to two rooms)."""
     cos_merge = np.cos(np.radians(MERGE_DEG))
     changed = True
     while changed:
         changed = False
         rows.sort(key=lambda r: (r["direction"], r["offset"], r["u_min"]))
+        ends = np.array([_ends(r) for r in rows]).reshape(-1, 2, 2)
+        nor = np.array([r["normal"] for r in rows]).reshape(-1, 2)
         out: list[dict] = []
         for r in rows:
             for o in out:
                 if _mergeable(o, r, depth_half, gap, cos_merge):
+                    turned = np.abs(nor @ np.asarray(o["normal"])) < np.cos(np.radians(PILASTER_PARALLEL_DEG))
+                    if _crossed(o, r, (ends[turned, 0], ends[turned, 1])):
+                        continue
                     _absorb(o, r)
                     changed = True
                     break
@@ -510,7 +565,7 @@ def _pieces(cols: Columns, run: IntArray, keep_run: np.ndarray, d: FloatArray, p
     return piece_of_col, normals
 
 
-def _segment_distance(s0: FloatArray, e0: FloatArray, s1: FloatArray, e1: FloatArray) -> FloatArray:
+def segment_distances(s0: FloatArray, e0: FloatArray, s1: FloatArray, e1: FloatArray) -> FloatArray:
     """``(n, m)`` plan distances between the segments ``s0-e0`` (n) and ``s1-e1`` (m)."""
 
     def point_seg(p, a, b):  # (n, 2) points to (m,) segments
@@ -562,7 +617,7 @@ def _free_standing(rows: list[dict], raster: StoryRaster, floor: float, ceiling:
         return out
     ends = [_ends(r) for r in rows]
     s, e = np.array([a for a, _ in ends]), np.array([b for _, b in ends])
-    near = _segment_distance(s, e, s, e) <= CONNECT_M
+    near = segment_distances(s, e, s, e) <= CONNECT_M
     # connected components (labels propagated to the smallest index)
     comp = np.arange(n)
     for _ in range(n):
@@ -649,13 +704,16 @@ def _wall_cores(rows: list[dict], params: WallParams) -> np.ndarray:
 
 
 def _pilasters(rows: list[dict], params: WallParams) -> np.ndarray:
-    """Rows of one story that stand out of a wall: pieces no longer than ``free_standing_m``
-    in front of a longer wall facing the same way (within :data:`PILASTER_PARALLEL_DEG`), more
-    than half the DBSCAN box's depth and at most :data:`PILASTER_DEPTH_M` in front of its plane
-    along their whole length, with that wall going on beyond both of their ends (by a column,
-    half a box length). They are the fronts of pilasters, engaged columns, chimney breasts or
-    cupboards against the wall: the wall behind bounds the room and is drawn across them. A step
-    of a wall (the wall behind on one side only) and a niche (a piece behind the wall) stay."""
+    """Rows of one story that stand out of a wall: pieces no longer than
+    :data:`BUILT_IN_FRONT_M` in front of a longer wall parallel to them (within
+    :data:`PILASTER_PARALLEL_DEG`, facing either way), more than half the DBSCAN box's depth and at most
+    :data:`PILASTER_DEPTH_M` in front of its plane along their whole length, with that wall going
+    on beyond both of their ends (by a column, half a box length), and the sides of such a
+    front: pieces turned from it that run from its ends back to the wall behind. They are
+    pilasters, engaged columns, chimney breasts, or cupboards and wardrobes against the wall
+    (whose tops the scan may not show, so that they rise as high as the walls were scanned):
+    the wall behind bounds the room and is drawn across them. A step of a wall (the wall
+    behind on one side only) and a niche (a piece behind the wall) stay."""
     n = len(rows)
     out = np.zeros(n, dtype=bool)
     if n < 2:
@@ -667,15 +725,86 @@ def _pilasters(rows: list[dict], params: WallParams) -> np.ndarray:
     off = np.array([r["offset"] for r in rows])
     lo, hi = np.array([r["u_min"] for r in rows]), np.array([r["u_max"] for r in rows])
     length = hi - lo
-    for i in np.flatnonzero(length <= params.free_standing_m):
-        ends = np.array(_ends(rows[i]))  # (2, 2)
-        depth = ends @ nor.T - off[None, :]  # how far each end stands in front of each plane
-        u = ends @ tan.T
-        ok = (length > length[i]) & (nor @ nor[i] >= cos_par)
+    ends = np.array([_ends(r) for r in rows])  # (n, 2 ends, 2)
+    fronts = []
+    for i in np.flatnonzero(length <= BUILT_IN_FRONT_M):
+        depth = ends[i] @ nor.T - off[None, :]  # how far each end stands in front of each plane
+        u = ends[i] @ tan.T
+        # parallel either way: a scan's faces on a cupboard's front may be turned into the box
+        # (the facing of a closed box, seen from one side, is a guess)
+        ok = (length > length[i]) & (np.abs(nor @ nor[i]) >= cos_par)
         ok &= np.all((depth > params.box_depth_m / 2) & (depth <= PILASTER_DEPTH_M), axis=0)
         ok &= (u.min(axis=0) >= lo + margin) & (u.max(axis=0) <= hi - margin)
         ok[i] = False
-        out[i] = bool(ok.any())
+        if ok.any():
+            out[i] = True
+            fronts.append((i, int(np.flatnonzero(ok)[np.argmax(length[ok])])))
+    # the sides of each front: turned from it, both ends between its plane and the wall's
+    # behind (within CONNECT_M) and at its ends along it
+    turned = np.abs(nor @ nor.T) < cos_par
+    for i, b in fronts:
+        side = turned[i] & ~out & (length <= PILASTER_DEPTH_M + CONNECT_M)
+        for j in np.flatnonzero(side):
+            across = ends[j] @ nor[b] - off[b]
+            along = ends[j] @ tan[i]
+            at_end = np.minimum(np.abs(along - lo[i]), np.abs(along - hi[i])) <= CONNECT_M
+            front = ends[i, 0] @ nor[b] - off[b]
+            if np.all((across >= -CONNECT_M) & (across <= front + CONNECT_M) & at_end):
+                out[j] = True
+    return out | _box_sides(rows, out, params)
+
+
+def _box_sides(rows: list[dict], dropped: np.ndarray, params: WallParams) -> np.ndarray:
+    """Rows of one story that are the two sides of a box against a wall whose front is no wall
+    (its front was not kept, or was dropped as a pilaster's, ``dropped``): pairs of short pieces
+    (at most :data:`PILASTER_DEPTH_M` plus :data:`CONNECT_M` long) turned from a longer wall,
+    each with one end at that wall's plane (within :data:`CONNECT_M`, inside its extent) and the
+    other in front of it, at most :data:`PILASTER_DEPTH_M` deep, the two free ends level with
+    each other (within :data:`CONNECT_M`), at most :data:`BUILT_IN_FRONT_M` apart along the wall,
+    and meeting no kept wall parallel to it: the sides of a wardrobe or a cupboard. A pier of
+    the wall has its front kept, the jambs of a doorway through a thick wall meet its other
+    face, and a corridor's walls are longer."""
+    n = len(rows)
+    out = np.zeros(n, dtype=bool)
+    if n < 3:
+        return out
+    cos_par = np.cos(np.radians(PILASTER_PARALLEL_DEG))
+    nor = np.array([r["normal"] for r in rows], dtype=np.float64)
+    tan = np.c_[-nor[:, 1], nor[:, 0]]
+    off = np.array([r["offset"] for r in rows])
+    lo, hi = np.array([r["u_min"] for r in rows]), np.array([r["u_max"] for r in rows])
+    length = hi - lo
+    ends = np.array([_ends(r) for r in rows])  # (n, 2 ends, 2)
+    short = np.flatnonzero(~dropped & (length <= PILASTER_DEPTH_M + CONNECT_M))
+    if len(short) < 2:
+        return out
+    kept = ~dropped
+    dist = segment_distances(ends[:, 0], ends[:, 1], ends[:, 0], ends[:, 1])
+    for b in np.flatnonzero(kept & (length > PILASTER_DEPTH_M + CONNECT_M)):
+        side = short[np.abs(nor[short] @ nor[b]) < np.sin(np.radians(PILASTER_PARALLEL_DEG))]  # square to the wall
+        if len(side) < 2:
+            continue
+        depth = ends[side] @ nor[b] - off[b]  # (k, 2): each end's depth in front of b's plane
+        foot = np.argmin(np.abs(depth), axis=1)
+        k = np.arange(len(side))
+        at_wall = np.abs(depth[k, foot]) <= CONNECT_M
+        tip = depth[k, 1 - foot]
+        along = ends[side, 0] @ tan[b]
+        ok = at_wall & (tip > params.box_depth_m / 2) & (tip <= PILASTER_DEPTH_M) & (along >= lo[b]) & (along <= hi[b])
+        # the free end meets no kept wall parallel to b (a front: the box is a pier of the
+        # wall; the other face of a thick wall: the jambs of a doorway through it)
+        tips = ends[side, 1 - foot]
+        fronts = kept & (np.abs(nor @ nor[b]) >= cos_par)
+        fronts[b] = False
+        if fronts.any():
+            ok &= ~np.any(segment_distances(tips, tips, ends[fronts, 0], ends[fronts, 1]) <= CONNECT_M, axis=1)
+        idx = np.flatnonzero(ok)
+        for a in idx:
+            for c in idx:
+                if c <= a or dist[side[a], side[c]] > BUILT_IN_FRONT_M or abs(tip[a] - tip[c]) > CONNECT_M:
+                    continue
+                if abs(along[a] - along[c]) >= params.box_depth_m:  # two sides, not two faces of one
+                    out[side[a]] = out[side[c]] = True
     return out
 
 

@@ -1,0 +1,127 @@
+"""What real interiors put beside their walls, that the wall stage must not take for walls:
+door leaves standing open (:func:`meshplan.plan.openings.door_leaves`), wardrobes and cupboards
+against a wall (:func:`meshplan.walls.flat._pilasters`, ``_box_sides``), and pieces of wall in
+two rooms on either side of a wall that crosses the gap between them (``_merge``)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from meshplan.plan.openings import LEAF_HINGE_M, Openings, door_leaves
+from meshplan.walls.flat import FlatWalls, _box_sides, _merge, _pilasters
+from meshplan.walls.params import WallParams
+
+
+def _row(a, b, normal, story: int = 0) -> dict:
+    """A wall row of the flat-wall stage from plan point ``a`` to ``b``, facing ``normal``."""
+    n = np.asarray(normal, float) / np.linalg.norm(normal)
+    t = np.array([-n[1], n[0]])
+    ua, ub = float(np.dot(a, t)), float(np.dot(b, t))
+    return {
+        "story": story, "direction": 0, "normal": (float(n[0]), float(n[1])), "offset": float(np.dot(a, n)),
+        "u_min": min(ua, ub), "u_max": max(ua, ub), "bottom": 0.0, "top": 2.0, "support": 100, "area": abs(ub - ua) * 2.0,
+        "segments": [],
+    }
+
+
+def _walls(rows: list[dict]) -> FlatWalls:
+    col = lambda key, dtype=float: np.array([r[key] for r in rows], dtype=dtype)  # noqa: E731
+    return FlatWalls(
+        story=col("story", np.int64), direction=col("direction", np.int64),
+        normal=np.array([r["normal"] for r in rows], float).reshape(-1, 2), offset=col("offset"),
+        u_min=col("u_min"), u_max=col("u_max"), bottom=col("bottom"), top=col("top"),
+        support=col("support", np.int64), area=col("area"), directions=np.array([[1.0, 0.0], [0.0, 1.0]]),
+        face_segment=np.zeros(0, np.int64), segment_story=np.zeros(0, np.int64),
+        segment_kept=np.zeros(0, bool), segment_wall=np.zeros(0, np.int64),
+    )
+
+
+def _door(walls: FlatWalls, wall: int, u0: float, u1: float) -> Openings:
+    return Openings(
+        story=np.zeros(1, np.int64), kind=("door",), wall=np.array([wall]), u_min=np.array([u0]),
+        u_max=np.array([u1]), bottom=np.zeros(1), top=np.array([2.05]),
+        faces=(((wall, u0, u1, 0.0, 2.05),),),
+    )
+
+
+# a partition along z = 0 (faces at z = 0 facing -z and z = 0.1 facing +z), 0.85 m door at x 2-2.85
+PARTITION = [_row((0, 0), (5, 0), (0, -1)), _row((0, 0.1), (5, 0.1), (0, 1))]
+
+
+def _tangent_u(walls: FlatWalls, w: int, x: float) -> float:
+    return float(walls.tangent[w] @ np.array([x, walls.offset[w] * walls.normal[w][1]]))
+
+
+@pytest.mark.parametrize("angle_deg", [20.0, 45.0, 90.0])
+def test_an_open_leaf_at_a_jamb_is_no_wall(angle_deg):
+    """A 0.85 m leaf hinged at the door's jamb on the +z face, opened by ``angle_deg``."""
+    a = np.radians(angle_deg)
+    hinge = np.array([2.0, 0.1 + 0.05])  # the flat wall on a leaf stops a few cm off its hinge
+    tip = np.array([2.0 + 0.85 * np.cos(a), 0.1 + 0.85 * np.sin(a)])
+    rows = [*PARTITION, _row(hinge, tip, (np.sin(a), -np.cos(a)))]
+    walls = _walls(rows)
+    u0, u1 = sorted((_tangent_u(walls, 1, 2.0), _tangent_u(walls, 1, 2.85)))
+    assert door_leaves(walls, _door(walls, 1, u0, u1)).tolist() == [False, False, True]
+
+
+def test_a_return_wall_beside_a_door_is_a_wall():
+    """A 0.8 m wall square to the partition at the door's jamb that meets a wall across its far
+    end (a closet's side) is a wall; without the door it is not even looked at."""
+    rows = [*PARTITION, _row((2.0, 0.1), (2.0, 0.9), (-1, 0)), _row((1.0, 0.9), (3.0, 0.9), (0, -1))]
+    walls = _walls(rows)
+    u0, u1 = sorted((_tangent_u(walls, 1, 2.0), _tangent_u(walls, 1, 2.85)))
+    assert not door_leaves(walls, _door(walls, 1, u0, u1)).any()
+    # the same piece with its far end free is the leaf (the test above, square)
+    walls = _walls(rows[:3])
+    assert door_leaves(walls, _door(walls, 1, u0, u1)).tolist() == [False, False, True]
+
+
+def test_a_panel_away_from_the_doors_jambs_is_no_leaf():
+    far = LEAF_HINGE_M + 0.3
+    rows = [*PARTITION, _row((2.0 - far, 0.1 + far), (2.0 - far, 0.95 + far), (-1, 0))]
+    walls = _walls(rows)
+    u0, u1 = sorted((_tangent_u(walls, 1, 2.0), _tangent_u(walls, 1, 2.85)))
+    assert not door_leaves(walls, _door(walls, 1, u0, u1)).any()
+
+
+# a room's wall along z = 4 facing -z (into the room at z < 4), 6 m long
+BACK = _row((0, 4), (6, 4), (0, -1))
+
+
+@pytest.mark.parametrize("width_m", [0.8, 1.3, 2.2])
+def test_a_wardrobe_against_a_wall_is_no_wall(width_m):
+    """Front 0.6 m in front of the wall (its faces turned into the box, as a scan's facing of a
+    closed box may be), and its two sides: none of them is a wall; the wall is."""
+    x0, x1 = 2.0, 2.0 + width_m
+    rows = [BACK, _row((x0, 3.4), (x1, 3.4), (0, 1)), _row((x0, 3.4), (x0, 4.0), (-1, 0)), _row((x1, 3.4), (x1, 4.0), (1, 0))]
+    assert _pilasters(rows, WallParams()).tolist() == [False, True, True, True]
+
+
+def test_a_wall_deeper_than_a_cupboard_in_front_of_another_is_a_wall():
+    """1 m in front of the wall (a corridor's wall, a room's): not a cupboard's front."""
+    rows = [BACK, _row((2.0, 3.0), (3.3, 3.0), (0, -1))]
+    assert not _pilasters(rows, WallParams()).any()
+
+
+def test_the_sides_of_a_wardrobe_whose_front_is_no_wall_are_no_walls():
+    rows = [BACK, _row((2.0, 3.4), (2.0, 4.0), (-1, 0)), _row((3.3, 3.4), (3.3, 4.0), (-1, 0))]
+    assert _pilasters(rows, WallParams()).tolist() == [False, True, True]
+    # the jambs of a doorway through a thick wall meet its other face: walls
+    rows.append(_row((1.0, 3.4), (4.0, 3.4), (0, -1)))
+    assert not _box_sides(rows, np.zeros(4, bool), WallParams()).any()
+    # one side alone (a return, a wall's end): a wall
+    assert not _box_sides(rows[:2], np.zeros(2, bool), WallParams()).any()
+
+
+def test_pieces_on_either_side_of_a_crossing_wall_are_two_walls():
+    """A bedroom's wall ends at the hall's wall (x = 3.7); a cupboard's side 1 m further on, in
+    the hall, lies in its line. With no wall between them they are one wall across the gap (a
+    door); with the hall's wall crossing the gap they are two."""
+    params = WallParams()
+    bedroom, cupboard = _row((0, 5.5), (3.6, 5.5), (0, -1)), _row((4.6, 5.5), (5.2, 5.5), (0, -1))
+    hall = _row((3.7, 0.5), (3.7, 8.0), (1, 0))
+    hall["direction"] = 1
+    assert len(_merge([dict(bedroom), dict(cupboard)], params.box_depth_m / 2, params.merge_gap_m)) == 1
+    merged = _merge([dict(bedroom), dict(cupboard), dict(hall)], params.box_depth_m / 2, params.merge_gap_m)
+    assert len(merged) == 3
