@@ -192,3 +192,26 @@ def test_a_gap_in_a_wall_scanned_no_higher_than_the_work_surfaces_is_no_door():
 def test_a_gap_lower_than_the_wall_beside_it_is_no_headless_door():
     """Jambs that stop 40 cm below the wall's scanned top: a hole in the scan, not a doorway."""
     assert _headless(1.8, jamb_top_m=1.4) == []
+
+
+def test_a_window_whose_head_was_not_scanned_is_found_from_its_sill_and_jambs():
+    """A face scanned to 1.7 m (nothing above) with an empty rectangle from a 0.9 m sill up to
+    where the scan stopped, 1.0-2.2 m along: a window with an assumed head. The same face with
+    the gap running down to the floor holds no window (a doorway, which the door search reads)."""
+    from meshplan.plan.doors import WINDOW_HEAD_ASSUMED_M, _headless_windows
+
+    f = _frame(CEILING)
+    grid = np.ones_like(f.grid)
+    top_row = int(round(1.7 / CELL))
+    grid[top_row : grid.shape[0] - f.margin] = False
+    grid[int(round(0.9 / CELL)) : top_row, int(round(1.0 / CELL)) : int(round(2.2 / CELL))] = False
+    walls = SimpleNamespace(u_min=np.array([0.0]), u_max=np.array([3.0]))
+    frame = _Frame(grid, f.lo, f.floor, f.ceiling, f.cell, f.margin, np.zeros(0), np.zeros(0), 0, False, False)
+    (window,) = _headless_windows(frame, walls, PlanParams())
+    assert window.kind == "window" and window.how == "head unseen"
+    assert window.u_min == pytest.approx(1.0, abs=CELL) and window.u_max == pytest.approx(2.2, abs=CELL)
+    assert window.bottom == pytest.approx(0.9, abs=CELL) and window.top == pytest.approx(WINDOW_HEAD_ASSUMED_M)
+    grid[: int(round(0.9 / CELL)), int(round(1.0 / CELL)) : int(round(2.2 / CELL))] = False
+    grid[: f.margin] = True
+    frame = _Frame(grid, f.lo, f.floor, f.ceiling, f.cell, f.margin, np.zeros(0), np.zeros(0), 0, False, False)
+    assert _headless_windows(frame, walls, PlanParams()) == []

@@ -125,3 +125,56 @@ def test_pieces_on_either_side_of_a_crossing_wall_are_two_walls():
     assert len(_merge([dict(bedroom), dict(cupboard)], params.box_depth_m / 2, params.merge_gap_m)) == 1
     merged = _merge([dict(bedroom), dict(cupboard), dict(hall)], params.box_depth_m / 2, params.merge_gap_m)
     assert len(merged) == 3
+
+
+def test_a_face_is_cut_where_a_wall_crosses_it():
+    """One DBSCAN segment across a T junction (a bath's wall and, past the hall's wall, a
+    cupboard's side in its line) is two faces; a stem ending on a wall cuts nothing."""
+    from meshplan.walls.flat import _split_at_crossings
+
+    params = WallParams()
+    long = _row((0.0, 0.0), (3.0, 0.0), (0, 1))
+    hall = _row((2.0, -1.5), (2.0, 1.5), (1, 0))  # runs on past the line on both sides
+    pieces = _split_at_crossings([long, hall], params.min_wall_length_m)
+    spans = sorted((round(p["u_min"], 3), round(p["u_max"], 3)) for p in pieces if p["normal"] == long["normal"])
+    t = np.array([-long["normal"][1], long["normal"][0]])
+    assert spans == sorted([tuple(sorted((0.0, float(np.dot([2.0, 0.0], t))))), tuple(sorted((float(np.dot([2.0, 0.0], t)), float(np.dot([3.0, 0.0], t)))))])
+    stem = _row((2.0, 0.0), (2.0, 1.5), (1, 0))  # a T: ends on the line
+    assert len(_split_at_crossings([long, stem], params.min_wall_length_m)) == 2
+
+
+def test_one_side_of_a_wardrobe_whose_front_shows_in_the_scan_is_no_wall():
+    """A 0.6 m piece square to a wall, its front (hidden by the wall behind it, so no wall)
+    scanned as high as the side beside its free end: a box's side. Beside a stub with a door
+    past it lies free floor: a wall."""
+    from meshplan.walls.evidence import RASTER_M, StoryRaster
+
+    params = WallParams()
+    rows = [BACK, _row((2.0, 3.4), (2.0, 4.0), (-1, 0))]
+    nx, nz = 80, 60
+    top = np.full((nx, nz), -np.inf)
+    raster = StoryRaster(0.0, 0.0, top, np.full((nx, nz), np.nan), np.zeros((nx, nz)))
+    assert not _pilasters(rows, params, raster).any()  # nothing beside its end: a stub wall
+    i0, i1 = int(2.0 / RASTER_M), int(3.3 / RASTER_M)
+    top[i0:i1, int(3.4 / RASTER_M)] = 2.0  # the front, 1.3 m wide, as high as the side
+    assert _pilasters(rows, params, raster).tolist() == [False, True]
+
+
+def test_the_outer_face_of_a_modelled_exterior_wall_is_no_wall():
+    """A parametric model's exterior wall, a box 0.1 mm thick at x = 1: its face toward x > 1
+    sees the room (scanned floor and furniture), its face toward x < 1 nothing. The outer face
+    is dropped; a single face seeing nothing (a scan's wall at the edge of what was scanned)
+    stays, and so do two faces that both see the scan (a partition modelled as one sheet)."""
+    from meshplan.walls.evidence import RASTER_M, StoryRaster
+    from meshplan.walls.flat import _outer_faces
+
+    params = WallParams()
+    inner, outer = _row((1.0, 0.5), (1.0, 4.5), (1, 0)), _row((1.0001, 0.5), (1.0001, 4.5), (-1, 0))
+    nx, nz = 60, 60
+    top = np.full((nx, nz), -np.inf)
+    top[int(1.2 / RASTER_M) :, :] = 0.0  # the room's floor, x > 1.2
+    raster = StoryRaster(0.0, 0.0, top, np.full((nx, nz), np.nan), np.zeros((nx, nz)))
+    assert _outer_faces([inner, outer], raster, params).tolist() == [False, True]
+    assert not _outer_faces([outer], raster, params).any()
+    top[: int(0.9 / RASTER_M), :] = 0.0  # a room on the other side too: a partition
+    assert not _outer_faces([inner, outer], raster, params).any()

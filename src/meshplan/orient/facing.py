@@ -43,6 +43,7 @@ def inward_flips(
     heights: FloatArray,
     stories: tuple[Story, ...],
     tolerance_m: float = 0.1,
+    rotation: FloatArray | None = None,
 ) -> np.ndarray:
     """Boolean mask of the faces whose winding should be reversed to face into the rooms.
 
@@ -56,6 +57,9 @@ def inward_flips(
         ``(F,)`` centroid heights, on the scale of the stories' floors and ceilings.
     stories
         Floors and ceilings found.
+    rotation
+        The rotation from the mesh's coordinates to the levelled frame of ``normals`` and
+        ``centroids`` (default: none), which places the floor's triangles for the walls' votes.
 
     Notes
     -----
@@ -79,7 +83,8 @@ def inward_flips(
     per = np.bincount(comp, weights=vote, minlength=int(comp.max()) + 1 if len(comp) else 0)
     undecided = per == 0
     if undecided.any():
-        walls = _wall_votes(normals, centroids, heights, areas, stories, horiz, tolerance_m, undecided[comp])
+        r = np.eye(3) if rotation is None else np.asarray(rotation, dtype=np.float64)
+        walls = _wall_votes(mesh, r, normals, centroids, heights, areas, stories, horiz, tolerance_m, undecided[comp])
         per = per + np.bincount(comp, weights=walls, minlength=len(per))
     majority_out = vote.sum() < 0
     flip_comp = (per < 0) | ((per == 0) & majority_out)
@@ -91,9 +96,12 @@ def inward_flips(
 #: partition, the next room, which the nearer probe misses) or nothing.
 _FLOOR_PROBES_M = (0.08, 0.2)
 _FLOOR_CELL_M = 0.05
+_SAMPLED_EDGE_CELLS = 32
 
 
 def _wall_votes(
+    mesh: Mesh,
+    rotation: FloatArray,
     normals: FloatArray,
     centroids: FloatArray,
     heights: FloatArray,
@@ -104,7 +112,12 @@ def _wall_votes(
     candidates: np.ndarray,
 ) -> FloatArray:
     """``(F,)`` votes of the near-vertical faces in ``candidates``: positive when their normal
-    points to the side where their story's floor is."""
+    points to the side where their story's floor is. The floor is rasterized from points over
+    its triangles (:data:`_FLOOR_CELL_M` apart), not from their centroids alone: the triangles of
+    a coarse or decimated scan (up to 25 cm) would leave most cells empty, and the probes would
+    find floor on either side by chance."""
+    from .._kernels import sample_faces  # numba: loaded when first needed
+
     out = np.zeros(len(normals))
     vertical = candidates & (np.abs(normals[:, 1]) < np.sin(np.radians(FACING_VERTICAL_DEG)))
     for s in stories:
@@ -112,7 +125,11 @@ def _wall_votes(
         mine = np.flatnonzero(vertical & (heights > s.floor) & (heights < s.ceiling))
         if not floor.any() or not len(mine):
             continue
-        cells = np.floor(centroids[floor][:, [0, 2]] / _FLOOR_CELL_M).astype(np.int64)
+        tri = np.ascontiguousarray(mesh.triangles[floor] @ rotation.T)
+        # (faces longer than _SAMPLED_EDGE_CELLS cells are split first: the sampler puts at
+        # most 64 points along an edge)
+        pts = sample_faces(tri, _SAMPLED_EDGE_CELLS * _FLOOR_CELL_M, _FLOOR_CELL_M)
+        cells = np.floor(pts[:, [0, 2]] / _FLOOR_CELL_M).astype(np.int64)
         lo = cells.min(axis=0)
         grid = np.zeros(tuple(cells.max(axis=0) - lo + 1), dtype=bool)
         grid[cells[:, 0] - lo[0], cells[:, 1] - lo[1]] = True

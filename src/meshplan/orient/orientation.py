@@ -238,7 +238,7 @@ def _orient(mesh: Mesh, params: OrientParams, up_hint: FloatArray | None, declar
     )
     alignment = WallAlignment(alignment.yaw, directions, alignment.centers @ r_yaw.T, alignment.weights, alignment.faces_used)
     face_story = assign_faces(heights, stories)
-    flipped = inward_flips(mesh, normals, centroids, heights, stories, params.slab_tolerance_m)
+    flipped = inward_flips(mesh, normals, centroids, heights, stories, params.slab_tolerance_m, rotation=r_level)
     for s in stories:
         if s.height > params.max_story_height_m:
             raise GeometryError(f"implausible story height of {s.height:.1f} m", "check the units of the scan (--units)")

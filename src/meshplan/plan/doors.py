@@ -213,9 +213,17 @@ class WallEvidence:
         tri = np.ascontiguousarray(self.tri)
         centres = np.broadcast_to(np.ascontiguousarray(self.centroids)[:, None, :], tri.shape)
         self.radius = max_corner_distance(tri, centres, 0) if len(tri) else np.zeros(0)
-        # the wall face each face of the mesh was found in (-1: none)
-        fw = walls.face_walls()
-        self.face_wall = fw if len(fw) == len(tri) else np.full(len(tri), -1, dtype=np.int64)
+        # the mean plan normal of the DBSCAN segment (kept as a wall or not) each face of the
+        # mesh was clustered in, zero for faces in none: a segment's faces share its surface
+        seg = walls.face_segment if len(walls.face_segment) == len(tri) else np.full(len(tri), -1, dtype=np.int64)
+        self.segment_normal = np.zeros((len(tri), 2))
+        if np.any(seg >= 0):
+            ok = seg >= 0
+            k = int(seg.max()) + 1
+            w = mesh.face_areas[ok]
+            sums: FloatArray = np.stack([np.bincount(seg[ok], weights=w * self.normals[ok, j], minlength=k) for j in (0, 2)], axis=1)
+            sn = sums / np.maximum(np.linalg.norm(sums, axis=1), 1e-12)[:, None]
+            self.segment_normal[ok] = sn[seg[ok]]
         self._cache: dict[tuple, tuple[FloatArray, IntArray, IntArray]] = {}
         self._panels: tuple[IntArray, IntArray] | None = None
         self._vertical_normals: FloatArray | None = None
@@ -416,10 +424,11 @@ def _gaps(ev: WallEvidence, w: int, floor: float, ceiling: float) -> list[Candid
 
     # triangles of the slab that face along the wall's normal
     cand = ev.near(ev.facing(w, (far, near), (lo, hi)), n3, t3, off, (far, near), (lo, hi), (floor, ceiling))
-    # a face found in another wall that turns from this one (a door leaf standing open a little,
-    # whose faces near the hinge reach into the slab; a return) is no evidence of this wall
-    other = ev.face_wall[cand]
-    cand = cand[(other < 0) | (np.abs(walls.normal[np.maximum(other, 0)] @ walls.normal[w]) >= np.cos(np.radians(COLLINEAR_DOOR_DEG)))]
+    # a face clustered with a surface that turns from this wall (a door leaf standing open a
+    # little, whose faces near the hinge reach into the slab; a return) is no evidence of it
+    seg_n = ev.segment_normal[cand]
+    clustered = np.any(seg_n != 0.0, axis=1)
+    cand = cand[~clustered | (np.abs(seg_n @ walls.normal[w]) >= np.cos(np.radians(COLLINEAR_DOOR_DEG)))]
     tv = ev.tri[cand]
     d = tv @ n3 - off
     u = tv @ t3
@@ -476,6 +485,7 @@ def _gaps(ev: WallEvidence, w: int, floor: float, ceiling: float) -> list[Candid
     floor_cols = _floor_beyond(ev, w, n3, t3, off, floor, lo, ncol, cell, params)
     frame = _Frame(grid, lo, floor, ceiling, cell, margin, vu, vy, w, left_corner is not None, right_corner is not None)
     found = _doors(frame, walls, floor_cols, params) + _windows(frame, walls, params)
+    found += [c for c in _headless_windows(frame, walls, params) if not any(_overlap(c, o) for o in found)]
     # doors whose leaf stands closed in its frame: the same reading on the face's own plane only,
     # where the whole slab shows something behind the face (the leaf or the room beyond); only
     # gaps under a lintel scanned in that plane (the frame on three sides) count
@@ -491,11 +501,15 @@ def _gaps(ev: WallEvidence, w: int, floor: float, ceiling: float) -> list[Candid
         face_grid = closed(face_raw)
         in_face = vd >= -LEAF_SET_BACK_M
         leaf = replace(frame, grid=face_grid, vu=vu[in_face], vy=vy[in_face])
-        found += [
-            replace(c, how="leaf")
-            for c in _doors(leaf, walls, floor_cols, params)
-            if c.how in ("gap", "corner") and not any(_overlap(c, o) for o in found)
-        ]
+        for c in _doors(leaf, walls, floor_cols, params):
+            if any(_overlap(c, o) for o in found):
+                continue
+            if c.how in ("gap", "corner"):
+                found.append(replace(c, how="leaf"))
+            elif c.how == "head unseen" and _open_in_slab(grid, door_rows, lo, cell, c):
+                # a leaf standing open reaches into the slab by its hinge only, a wedge beside
+                # one jamb that the face's own plane does not hold: the doorway is open
+                found.append(c)
     # windows whose glazing was scanned, set back in a reveal: holes in the face's own plane
     # over a surface behind it that faces the room (the wall's far face faces away)
     room = ev.normals[cand][keep] @ n3 > ev.cos
@@ -513,6 +527,22 @@ def _gaps(ev: WallEvidence, w: int, floor: float, ceiling: float) -> list[Candid
 
         found += [c for c in _recesses(frame, face, recess, depth, walls, params) if not any(_overlap(c, o, RECESS_APART_M) for o in found)]
     return found
+
+
+#: A doorway found in a face's own plane is open (its leaf stands open, reaching into the slab
+#: by its hinge only) when at least this share of its columns is empty in the whole slab, from
+#: the floor to a door's height; a closed leaf set back in its frame fills them all.
+OPEN_IN_SLAB_SHARE = 0.5
+
+
+def _open_in_slab(grid: np.ndarray, rows: slice, lo: float, cell: float, c: Candidate) -> bool:
+    """Whether :data:`OPEN_IN_SLAB_SHARE` of the columns of door ``c`` are empty over ``rows``
+    in the whole slab's raster ``grid`` (from ``lo`` along the wall, ``cell`` a column)."""
+    a = max(0, int(np.floor((c.u_min - lo) / cell)))
+    b = min(grid.shape[1], int(np.ceil((c.u_max - lo) / cell)))
+    if b <= a:
+        return False
+    return bool(np.mean(~grid[rows, a:b].any(axis=0)) >= OPEN_IN_SLAB_SHARE)
 
 
 def _overlap(a: Candidate, b: Candidate, margin: float = 0.0) -> bool:
@@ -724,8 +754,9 @@ def _doors(f: _Frame, walls: FlatWalls, floor_cols: np.ndarray, params: PlanPara
             top = float(np.median(heads))
             if np.mean(np.abs(heads - top) <= tol) < params.opening_edge_straightness:
                 continue  # a ragged top: a hole in the scan, not a lintel
-        elif not closed.any():
-            # no lintel scanned, and the floor runs on through the gap beyond the wall: either
+        elif closed.mean() <= 1.0 - params.opening_edge_straightness:
+            # no lintel scanned (a few columns may hold a speck: a stray triangle, the edge of a
+            # leaf standing open), and the floor runs on through the gap beyond the wall: either
             # the wall beside the gap rises above any door head (the scan missed the lintel),
             # or the jambs rise as high as the wall beside them was scanned, above the work
             # surfaces (the head is in the unscanned band over the wall's top)
@@ -756,23 +787,25 @@ def _doors(f: _Frame, walls: FlatWalls, floor_cols: np.ndarray, params: PlanPara
 
 
 def _jambs_reach_wall_top(f: _Frame, col_top: FloatArray, left: int, right: int) -> bool:
-    """Whether the wall at each jamb (the columns ``left`` and ``right`` and the
+    """Whether the wall at each jamb (the highest of the columns ``left`` and ``right`` and the
     :data:`EDGE_CELLS` next to them in the wall, for the rounded or decimated corner of a jamb)
-    rises within :data:`EDGE_CELLS` cells of the top of the wall scanned beside it (the highest
-    column within :data:`HEAD_UNSEEN_CONTEXT_M` on its side, the columns a corner closes left
-    out): the gap's edges are the wall's full scanned height, not a hole lower in it."""
+    rises within :data:`EDGE_CELLS` cells of the top of the wall scanned beside it (the median
+    top of the columns within :data:`HEAD_UNSEEN_CONTEXT_M` on its side, the columns a corner
+    closes left out: a ragged top scatters by a few cells): the gap's edges are the wall's full
+    scanned height, not a hole lower in it."""
     k = max(1, int(np.ceil(HEAD_UNSEEN_CONTEXT_M / f.cell)))
     first = EDGE_CELLS if f.left_corner else 0
     stop = len(col_top) - EDGE_CELLS if f.right_corner else len(col_top)
     tol = EDGE_CELLS * f.cell
 
-    def top(a: int, b: int) -> float:
-        a, b = max(a, first), min(b, stop)
-        return float(col_top[a:b].max()) if b > a else -np.inf
+    def tops(a: int, b: int) -> FloatArray:
+        return col_top[max(a, first) : min(b, stop)]
 
-    return (
-        top(left - EDGE_CELLS, left + 1) >= top(left - k, left + 1) - tol
-        and top(right, right + EDGE_CELLS + 1) >= top(right, right + k + 1) - tol
+    def reaches(jamb: FloatArray, beside: FloatArray) -> bool:
+        return bool(len(jamb) and len(beside) and jamb.max() >= np.median(beside) - tol)
+
+    return reaches(tops(left - EDGE_CELLS, left + 1), tops(left - k, left + 1)) and reaches(
+        tops(right, right + EDGE_CELLS + 1), tops(right, right + k + 1)
     )
 
 
@@ -802,6 +835,38 @@ def _windows(f: _Frame, walls: FlatWalls, params: PlanParams) -> list[Candidate]
         cores[rs.start + r0 : rs.start + r1, cs.start + c0 : cs.start + c1] = True
     if cores.any():
         out += [c for c in _window_regions(f, walls, params, cores, framed_sides=3) if not any(_overlap(c, o) for o in out)]
+    return out
+
+
+#: Head given to a window whose head was not scanned (m above its floor): the line of the door
+#: heads, where most window heads stand (2.0-2.2 m).
+WINDOW_HEAD_ASSUMED_M = 2.1
+
+
+def _headless_windows(f: _Frame, walls: FlatWalls, params: PlanParams) -> list[Candidate]:
+    """Windows in a face scanned only up to a height below its ceiling (the unscanned band above
+    it, :data:`HEAD_UNSEEN_MIN_TOP_M`): the band above the face's scanned top (the median top of
+    its columns) is taken as wall, so that a window whose head stands in it shows as an empty
+    rectangle from its sill up to where the scan stopped, framed by straight jambs and a sill
+    (:func:`_window_regions`); its head is assumed (:data:`WINDOW_HEAD_ASSUMED_M`)."""
+    g, cell, m = f.grid, f.cell, f.margin
+    nrow, ncol = g.shape
+    body = g[m : nrow - m]
+    col_u = f.lo + (np.arange(ncol) + 0.5) * cell
+    filled = body.any(axis=0) & (col_u >= walls.u_min[f.wall]) & (col_u <= walls.u_max[f.wall])
+    if not filled.any():
+        return []
+    top_rows = body.shape[0] - 1 - np.argmax(body[::-1], axis=0)
+    top_row = int(np.median(top_rows[filled])) + m  # the last row of wall, in grid rows
+    scanned_top = f.floor + (top_row + 1) * cell
+    if scanned_top >= f.ceiling - params.opening_margin_m - EDGE_CELLS * cell or scanned_top - f.floor < HEAD_UNSEEN_MIN_TOP_M:
+        return []
+    grid = g.copy()
+    grid[top_row + 1 :] = True  # the unscanned band: wall, as far as a window is concerned
+    out = []
+    for c in _window_regions(replace(f, grid=grid), walls, params, ~grid):
+        if c.top >= scanned_top - EDGE_CELLS * cell:  # up to where the scan stopped
+            out.append(replace(c, top=max(c.top, f.floor + WINDOW_HEAD_ASSUMED_M), how="head unseen"))
     return out
 
 

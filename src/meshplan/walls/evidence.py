@@ -387,6 +387,14 @@ def ceiling_behind(
     return _share_behind(raster, raster.top, ceiling_m, start, end, normal, thickness_m, depth_m)
 
 
+def seen_in_front(raster: StoryRaster, start: FloatArray, end: FloatArray, normal: FloatArray, near_m: float, depth_m: float) -> FloatArray:
+    """Share of the length of each wall face with anything scanned in front of it (on the side
+    its normal points to), beyond ``near_m`` and within ``depth_m``: where nothing is, the face
+    looks out of everything scanned (the outer face of a model's exterior wall). Same
+    parameters as :func:`floor_behind`."""
+    return _share_behind(raster, raster.top, float(np.finfo(np.float64).min), start, end, -normal, near_m, depth_m)
+
+
 def work_surface_in_front(raster: StoryRaster, start: FloatArray, end: FloatArray, normal: FloatArray, floor: float, work_surface_m: float) -> FloatArray:
     """Share of the length of each wall face with a level surface at work-surface height (more
     than :data:`FLOOR_CLEARANCE_M` and at most ``work_surface_m`` above ``floor``) in front of

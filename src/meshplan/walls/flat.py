@@ -44,6 +44,7 @@ from .evidence import (
     FLOOR_CLEARANCE_M,
     MIN_COLUMN_SPAN_SHARE,
     MIN_TOP_SHARE,
+    RASTER_M,
     SPLIT_SHARE,
     Columns,
     StoryRaster,
@@ -56,6 +57,7 @@ from .evidence import (
     local_top,
     neighbour_max,
     runs,
+    seen_in_front,
     story_raster,
     subdivide,
     top_around,
@@ -115,6 +117,11 @@ FILL_MIN_AREA_M2 = 2.0
 #: hold on average per 10 degrees: the normals of headset meshes scatter over every azimuth
 #: (1-2 m2 per 10 degrees in a large hall), and only a wall stands out of that scatter.
 FILL_PEAK_RATIO = 3.0
+
+#: Lowest top of a parapet under a window (m above the floor; :func:`_wall_columns`): window
+#: sills stand 0.4-1.2 m high (0.3 m is the lowest :class:`~meshplan.plan.params.PlanParams`
+#: takes), above a skirting board's or a step's top.
+PARAPET_MIN_M = 0.3
 
 #: A face is vertical for the direction search when its normal is within this angle of the
 #: horizontal (degrees), as in the wall alignment.
@@ -436,34 +443,77 @@ def _absorb(o: dict, r: dict) -> None:
     o["segments"] = o["segments"] + r["segments"]
 
 
-#: A wall crosses the gap between two coplanar pieces when it meets their line this far (m) or
-#: more inside the gap from both of its ends: the pieces then lie in two rooms on either side of
-#: that wall, not on either side of a door. Nearer to an end it is a jamb's own return, or the
-#: leaf of a door standing at its jamb.
-CROSSING_INSIDE_M = 0.1
+#: A wall crosses the line of two coplanar pieces when it runs on past that line by at least this
+#: much (m) on both sides: a wall of the rooms on either side, not a return, a jamb's stub or a
+#: door leaf that ends on the line.
+CROSSING_THROUGH_M = 0.3
 
 
 def _crossed(o: dict, r: dict, walls: tuple[FloatArray, FloatArray]) -> bool:
-    """Whether one of ``walls`` (plan ends ``(starts, ends)``, extended by :data:`CONNECT_M` at
-    each end: scans leave corners open) crosses the line of pieces ``o`` and ``r`` inside the gap
-    between them (:data:`CROSSING_INSIDE_M`)."""
+    """Whether one of ``walls`` (plan ends ``(starts, ends)``) crosses the line of pieces ``o``
+    and ``r`` (running on past it by :data:`CROSSING_THROUGH_M` on both sides) in the gap
+    between them or at its ends (within :data:`CONNECT_M`: a partition as thick as the gap
+    stands in it with its faces on the gap's ends). The pieces then lie in two rooms on either
+    side of that wall, not on either side of a door."""
     if not len(walls[0]):
         return False
     n = np.asarray(o["normal"])
     t = np.array([-n[1], n[0]])
     (a0, a1), (b0, b1) = sorted((sorted(np.array(_ends(o)) @ t), sorted(np.array(_ends(r)) @ t)))
-    lo, hi = a1 + CROSSING_INSIDE_M, b0 - CROSSING_INSIDE_M
-    if hi <= lo:  # no gap (or too short a one for a wall to stand in)
+    if b0 <= a1:  # they overlap along the line: no gap
         return False
     s, e = walls
-    d = e - s
-    dn = d @ n
-    across = d @ t
-    ok = np.abs(dn) > 1e-9
-    k = np.where(ok, (o["offset"] - s @ n) / np.where(ok, dn, 1.0), np.inf)  # where each meets the line
-    reach = CONNECT_M / np.maximum(np.linalg.norm(d, axis=1), 1e-9)
-    u = s @ t + k * across
-    return bool(np.any(ok & (k >= -reach) & (k <= 1 + reach) & (u >= lo) & (u <= hi)))
+    ds, de = s @ n - o["offset"], e @ n - o["offset"]  # each end's side of the line
+    through = (np.minimum(ds, de) <= -CROSSING_THROUGH_M) & (np.maximum(ds, de) >= CROSSING_THROUGH_M)
+    k = ds / np.where(through, ds - de, 1.0)  # where each meets the line
+    u = s @ t + k * ((e - s) @ t)
+    return bool(np.any(through & (u >= a1 - CONNECT_M) & (u <= b0 + CONNECT_M)))
+
+
+def _crossings(rows: list[dict], i: int) -> FloatArray:
+    """Where the other rows cross row ``i`` (positions along its tangent, sorted): walls turned
+    from it that run on past its line by :data:`CROSSING_THROUGH_M` on both sides and meet it
+    inside its span."""
+    r = rows[i]
+    n = np.asarray(r["normal"])
+    t = np.array([-n[1], n[0]])
+    cos_par = np.cos(np.radians(PILASTER_PARALLEL_DEG))
+    cuts = []
+    for j, o in enumerate(rows):
+        if j == i or abs(float(np.asarray(o["normal"]) @ n)) >= cos_par:
+            continue
+        s, e = _ends(o)
+        ds, de = float(s @ n - r["offset"]), float(e @ n - r["offset"])
+        if min(ds, de) > -CROSSING_THROUGH_M or max(ds, de) < CROSSING_THROUGH_M:
+            continue
+        u = float(s @ t + ds / (ds - de) * ((e - s) @ t))
+        if r["u_min"] < u < r["u_max"]:
+            cuts.append(u)
+    return np.sort(np.array(cuts, dtype=np.float64))
+
+
+def _split_at_crossings(rows: list[dict], min_length_m: float) -> list[dict]:
+    """The rows cut where another wall crosses them (:func:`_crossings`): a wall's face ends
+    where a wall of the rooms on its side meets it, and what lies in its line beyond (the face
+    of the next room's wall, a cupboard's side, scanned close enough to be one DBSCAN segment
+    across the junction) is judged on its own. Pieces shorter than ``min_length_m`` (the
+    crossing wall's own thickness between its faces, the few centimetres a face overshoots the
+    wall it meets) are dropped; each piece keeps its share of the row's support and area by
+    length."""
+    out: list[dict] = []
+    for i, r in enumerate(rows):
+        cuts = _crossings(rows, i)
+        if not len(cuts):
+            out.append(r)
+            continue
+        bounds = np.r_[r["u_min"], cuts, r["u_max"]]
+        length = r["u_max"] - r["u_min"]
+        for lo, hi in zip(bounds[:-1], bounds[1:]):
+            if hi - lo < min_length_m:
+                continue
+            share = (hi - lo) / length
+            out.append({**r, "u_min": float(lo), "u_max": float(hi), "support": int(round(r["support"] * share)), "area": r["area"] * share})
+    return out
 
 
 def _merge(rows: list[dict], depth_half: float, gap: float) -> list[dict]:
@@ -703,7 +753,43 @@ def _wall_cores(rows: list[dict], params: WallParams) -> np.ndarray:
     return core.any(axis=1)
 
 
-def _pilasters(rows: list[dict], params: WallParams) -> np.ndarray:
+#: The outer face of a modelled wall looks at nothing scanned along at least this share of it
+#: (:func:`_outer_faces`); its inner face sees the room.
+OUTSIDE_SHARE = 0.9
+
+#: ... from this far in front of it (m): past the box's own other face and its corners.
+OUTSIDE_NEAR_M = 0.1
+
+
+def _outer_faces(rows: list[dict], raster: StoryRaster, params: WallParams) -> np.ndarray:
+    """Rows of one story that are the outer faces of a modelled exterior wall: a face that
+    coincides with one facing the other way (a parametric model's wall is one box 0.1 mm thick,
+    each of its sides a face; within :data:`CORE_MIN_M`, along half of the shorter), with
+    nothing scanned in front of it along :data:`OUTSIDE_SHARE` of it (beyond
+    :data:`OUTSIDE_NEAR_M` and within ``context_m``) while the other face sees the scan. It looks
+    out of the building and bounds no space; the wall is its inner face. A scan never shows a
+    wall's two sides in one plane."""
+    n = len(rows)
+    out = np.zeros(n, dtype=bool)
+    if n < 2:
+        return out
+    nor = np.array([r["normal"] for r in rows], dtype=np.float64)
+    off = np.array([r["offset"] for r in rows])
+    lo, hi = np.array([r["u_min"] for r in rows]), np.array([r["u_max"] for r in rows])
+    opposite = nor @ nor.T <= -np.cos(np.radians(PILASTER_PARALLEL_DEG))
+    apart = np.abs(off[:, None] + off[None, :])  # j's plane in i's frame is -off_j
+    overlap = np.minimum(hi[:, None], -lo[None, :]) - np.maximum(lo[:, None], -hi[None, :])
+    shorter = np.minimum((hi - lo)[:, None], (hi - lo)[None, :])
+    twin = opposite & (apart <= CORE_MIN_M) & (overlap >= CORE_OVERLAP_SHARE * shorter)
+    if not twin.any():
+        return out
+    ends = np.array([_ends(r) for r in rows])
+    seen = seen_in_front(raster, ends[:, 0], ends[:, 1], nor, OUTSIDE_NEAR_M, params.context_m)
+    outside = seen <= 1.0 - OUTSIDE_SHARE
+    return outside & np.any(twin & ~outside[None, :], axis=1)
+
+
+def _pilasters(rows: list[dict], params: WallParams, raster: StoryRaster | None = None) -> np.ndarray:
     """Rows of one story that stand out of a wall: pieces no longer than
     :data:`BUILT_IN_FRONT_M` in front of a longer wall parallel to them (within
     :data:`PILASTER_PARALLEL_DEG`, facing either way), more than half the DBSCAN box's depth and at most
@@ -751,10 +837,10 @@ def _pilasters(rows: list[dict], params: WallParams) -> np.ndarray:
             front = ends[i, 0] @ nor[b] - off[b]
             if np.all((across >= -CONNECT_M) & (across <= front + CONNECT_M) & at_end):
                 out[j] = True
-    return out | _box_sides(rows, out, params)
+    return out | _box_sides(rows, out, params, raster)
 
 
-def _box_sides(rows: list[dict], dropped: np.ndarray, params: WallParams) -> np.ndarray:
+def _box_sides(rows: list[dict], dropped: np.ndarray, params: WallParams, raster: StoryRaster | None = None) -> np.ndarray:
     """Rows of one story that are the two sides of a box against a wall whose front is no wall
     (its front was not kept, or was dropped as a pilaster's, ``dropped``): pairs of short pieces
     (at most :data:`PILASTER_DEPTH_M` plus :data:`CONNECT_M` long) turned from a longer wall,
@@ -763,10 +849,12 @@ def _box_sides(rows: list[dict], dropped: np.ndarray, params: WallParams) -> np.
     each other (within :data:`CONNECT_M`), at most :data:`BUILT_IN_FRONT_M` apart along the wall,
     and meeting no kept wall parallel to it: the sides of a wardrobe or a cupboard. A pier of
     the wall has its front kept, the jambs of a doorway through a thick wall meet its other
-    face, and a corridor's walls are longer."""
+    face, and a corridor's walls are longer. With the story's ``raster``, one such side alone
+    is a box's too where its front, as high as the side, runs on from its free end along the
+    wall (:func:`_front_at`; the front itself no wall, hidden by the wall behind it)."""
     n = len(rows)
     out = np.zeros(n, dtype=bool)
-    if n < 3:
+    if n < (2 if raster is not None else 3):  # a wall and one side, or two
         return out
     cos_par = np.cos(np.radians(PILASTER_PARALLEL_DEG))
     nor = np.array([r["normal"] for r in rows], dtype=np.float64)
@@ -776,13 +864,13 @@ def _box_sides(rows: list[dict], dropped: np.ndarray, params: WallParams) -> np.
     length = hi - lo
     ends = np.array([_ends(r) for r in rows])  # (n, 2 ends, 2)
     short = np.flatnonzero(~dropped & (length <= PILASTER_DEPTH_M + CONNECT_M))
-    if len(short) < 2:
+    if len(short) < (1 if raster is not None else 2):
         return out
     kept = ~dropped
     dist = segment_distances(ends[:, 0], ends[:, 1], ends[:, 0], ends[:, 1])
     for b in np.flatnonzero(kept & (length > PILASTER_DEPTH_M + CONNECT_M)):
         side = short[np.abs(nor[short] @ nor[b]) < np.sin(np.radians(PILASTER_PARALLEL_DEG))]  # square to the wall
-        if len(side) < 2:
+        if not len(side):
             continue
         depth = ends[side] @ nor[b] - off[b]  # (k, 2): each end's depth in front of b's plane
         foot = np.argmin(np.abs(depth), axis=1)
@@ -805,7 +893,41 @@ def _box_sides(rows: list[dict], dropped: np.ndarray, params: WallParams) -> np.
                     continue
                 if abs(along[a] - along[c]) >= params.box_depth_m:  # two sides, not two faces of one
                     out[side[a]] = out[side[c]] = True
+        # one side alone, where the box's front (not kept: hidden by the wall behind it) shows
+        # in the scan, running on from its free end along the wall as high as the side
+        if raster is not None:
+            for a in idx[~out[side[idx]]]:
+                if _front_at(raster, tips[a], tan[b], float(rows[side[a]]["top"])):
+                    out[side[a]] = True
     return out
+
+
+#: Where a box's front is looked for beside the free end of one of its sides (m along the wall
+#: from the end; :func:`_front_at`): past the corner's rounding, within the narrowest cupboard.
+FRONT_SEARCH_M = (0.15, 0.6)
+
+#: The front rises this close (m) to the top of the side: a box's top is level, and the scan
+#: cuts its front and sides at one height.
+FRONT_TOP_M = 0.2
+
+
+def _front_at(raster: StoryRaster, tip: FloatArray, tangent: FloatArray, top: float) -> bool:
+    """Whether a surface as high as ``top`` (within :data:`FRONT_TOP_M`) was scanned along most
+    (:data:`SIDE_COVER_FRONT`) of :data:`FRONT_SEARCH_M` from the plan point ``tip`` along
+    ``tangent``, one way or the other: the front of the box whose side ends at ``tip``. Beside
+    the free end of a stub wall with a door past it lies the free floor of the rooms it parts."""
+    steps = np.arange(FRONT_SEARCH_M[0], FRONT_SEARCH_M[1] + 1e-9, RASTER_M / 2)
+    across = np.array([-tangent[1], tangent[0]])
+    for sign in (1.0, -1.0):
+        p = tip[None, None, :] + sign * steps[:, None, None] * tangent + np.array([-1.0, 0.0, 1.0])[None, :, None] * (RASTER_M / 2) * across
+        tops = raster.sample(raster.top, p[..., 0], p[..., 1], -np.inf).max(axis=1)
+        if float(np.mean(tops >= top - FRONT_TOP_M)) >= SIDE_COVER_FRONT:
+            return True
+    return False
+
+
+#: Share of the search beside a side's free end (:func:`_front_at`) that the front must fill.
+SIDE_COVER_FRONT = 0.75
 
 
 def find_flat_walls(mesh: Mesh, orientation: Orientation, params: WallParams | None = None) -> FlatWalls:
@@ -948,8 +1070,11 @@ def find_flat_walls(mesh: Mesh, orientation: Orientation, params: WallParams | N
                 for j in range(n_pieces)
                 if present[j]
             )
-        found = _merge(found, params.box_depth_m / 2, params.merge_gap_m)
-        free = _free_standing(found, raster, story.floor, ceiling, params) | _pilasters(found, params) | _wall_cores(found, params)
+        found = _split_at_crossings(_merge(found, params.box_depth_m / 2, params.merge_gap_m), params.min_wall_length_m)
+        free = (
+            _free_standing(found, raster, story.floor, ceiling, params) | _pilasters(found, params, raster) | _wall_cores(found, params)
+            | _outer_faces(found, raster, params)
+        )
         for r in (r for r, f in zip(found, free) if f):
             for sid in r["segments"]:
                 seg_kept[sid] = False
@@ -1016,6 +1141,11 @@ def _wall_columns(
     flush = hidden_behind(cols, params.context_m, params.box_depth_m, params.max_work_surface_m)
     above_work |= edge & ~furniture_top & ~flush & (top > floor + EDGE_WALL_MIN_SEEN_M)
     plausible = reaches & above_work & ~furniture_top & ~hidden
+    # a wall under a window (a parapet) has the window's sill on its top, as a counter's front
+    # has its worktop: too little to tell alone, it neither starts nor breaks a run of wall
+    # columns in its plane (:func:`meshplan.walls.evidence.runs`); a front 0.6 m before the
+    # wall it stands against lies in a plane of its own
+    parapet = furniture_top & ~hidden & (cols.top >= floor + PARAPET_MIN_M) & (cols.top <= floor + params.max_work_surface_m)
     # a wall grazed at the edge of the scan: the sensor's rays met it ever more obliquely, so its
     # end is seen lower and lower (1.5-2 m where the rest reaches the ceiling). Such a column,
     # risen above the work surfaces with no top attached and nothing behind it, and seen over
@@ -1024,7 +1154,7 @@ def _wall_columns(
     # :func:`_in_line_of_walls`)
     grazed = edge & ~reaches & ~furniture_top & ~hidden & (cols.top > floor + params.max_work_surface_m)
     grazed &= cols.top - cols.bottom >= MIN_COLUMN_SPAN_SHARE * (cols.top - floor)
-    return plausible & seen, plausible & ~seen, edge, grazed
+    return plausible & seen, (plausible & ~seen) | (parapet & ~plausible), edge, grazed
 
 
 def _in_line_of_walls(
