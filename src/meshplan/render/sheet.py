@@ -11,7 +11,6 @@ the page's geometry.
 
 from __future__ import annotations
 
-import io
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -578,19 +577,17 @@ def ink_rgba(counts: np.ndarray, opacity: float, color: str = "#14213d", width_p
     return lut.view(np.uint32)[c].view(np.uint8).reshape(*c.shape, 4)
 
 
-_RC: dict[RcKeyType, Any] = {"svg.fonttype": "none", "svg.hashsalt": "meshplan", "pdf.compression": 1, "path.simplify": True}
+_RC: dict[RcKeyType, Any] = {"path.simplify": True}
+
+
+def figure_files(fig, fmts) -> dict[str, bytes]:
+    """``format -> bytes`` of a figure in each of ``fmts`` (PNG, SVG, PDF), drawn once for all
+    of them (:mod:`.vector`), without timestamps (byte-reproducible)."""
+    from .vector import figure_files as files
+
+    return files(fig, fmts)
+
 
 def figure_bytes(fig, fmt: str) -> bytes:
     """Render a figure to PNG, SVG or PDF bytes, without timestamps (byte-reproducible)."""
-    import matplotlib
-
-    meta = {
-        "png": {"Software": "meshplan"},
-        "svg": {"Date": None, "Creator": "meshplan"},
-        "pdf": {"CreationDate": None, "Creator": "meshplan", "Producer": "meshplan"},
-    }[fmt]
-    buf = io.BytesIO()
-    with matplotlib.rc_context(_RC):
-        kwargs = {"pil_kwargs": {"compress_level": 1}} if fmt == "png" else {}
-        fig.savefig(buf, format=fmt, metadata=meta, **kwargs)
-    return buf.getvalue()
+    return figure_files(fig, (fmt,))[fmt]
