@@ -977,10 +977,14 @@ def figure_files(fig, fmts: Iterable[str], metadata_creator: str = "meshplan") -
 
 
 def draw_raster_only(fig) -> RendererAgg:
-    """The pixels of a figure the recorder cannot follow: a plain Agg drawing."""
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-
+    """The pixels alone of a figure (for its PNG alone, or one the recorder cannot follow): a
+    plain Agg drawing, on the figure's own Agg renderer unless that is a recorder."""
     canvas = fig.canvas if isinstance(fig.canvas, FigureCanvasAgg) else FigureCanvasAgg(fig)
+    if isinstance(canvas, PlanCanvas):
+        w, h = canvas.get_width_height(physical=True)
+        renderer = RendererAgg(w, h, fig.dpi)
+        fig.draw(renderer)
+        return renderer
     canvas.draw()
     return canvas.get_renderer()
 
