@@ -53,21 +53,3 @@ def test_one_worker_makes_the_files_the_run_alone_makes(computed):
     for name in here:
         assert here[name] == there[name] == split[name], name
 
-
-def test_writers_preloaded_in_a_thread_the_pool_waits_for(monkeypatch):
-    """The run imports its writers' libraries in a thread while it computes; a pool forks its
-    workers only once such a thread is done (a fork mid-import would leave the child's module
-    locks held)."""
-    import threading
-    import time
-
-    from meshplan import export
-
-    thread = export.preload_writers()
-    thread.join(timeout=60)
-    assert not thread.is_alive() and {"ezdxf", "jinja2"} <= set(sys.modules)
-    slow = threading.Thread(target=time.sleep, args=(0.3,), daemon=True)
-    monkeypatch.setattr(export, "_PRELOADING", [slow])
-    slow.start()
-    with export.RenderPool(2):
-        assert not slow.is_alive()

@@ -16,7 +16,7 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-from .export import RenderPool, _processes, preload_writers, submit_early, write_results
+from .export import RenderPool, _processes, submit_early, write_results
 from .geometry import Annotations
 from .io import check_output_dir, load_annotations, load_mesh
 from .options import RunOptions
@@ -96,8 +96,6 @@ def run(
     t0 = time.perf_counter()
     # the drawing workers start now and get ready while the stages compute
     with RenderPool(_processes(options.render)) if output is not None else nullcontext() as pool:
-        if output is not None:
-            preload_writers()  # after the workers are forked (see its docstring)
         with timer.stage("load"):
             # with keyword parameters, an absent --units comes as None (dropped by from_kwargs)
             explicit = params.get("units") is not None if "units" in params else None

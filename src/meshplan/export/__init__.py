@@ -45,7 +45,6 @@ __all__ = [
     "dumps",
     "plan_document",
     "plan_schema",
-    "preload_writers",
     "render_files",
     "submit_early",
     "write_results",
@@ -352,11 +351,6 @@ class RenderPool:
             import signal
             from concurrent.futures import ProcessPoolExecutor
 
-            # a previous run's preloading thread (a batch runs scans one after the other)
-            # must not be forked mid-import: the child would inherit its module locks held
-            for thread in list(_PRELOADING):
-                thread.join()
-
             # SIGINT blocked while forking: a Ctrl-C then waits for this process (which reports
             # it in one line) instead of reaching a worker before it ignores it
             blocked = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
@@ -463,41 +457,6 @@ class EarlyDrawings:
 
     jobs: list[tuple]
     futures: list
-
-
-#: Libraries the run itself needs only once its stages are done (the DXF files' ezdxf, the
-#: report's jinja2), imported meanwhile by :func:`preload_writers`.
-_WRITER_MODULES = ("ezdxf", "jinja2")
-
-
-def preload_writers():
-    """Import, in a daemon thread, the libraries this process writes files with once the stages
-    are done (:data:`_WRITER_MODULES`; ezdxf alone took 0.24 s), so that the run does not wait
-    for them then. Returns the thread.
-
-    The stages mostly run outside the interpreter lock (numpy, numba) while the drawing worker
-    leaves the other core idle after its warm-up, which the import uses; an import in progress
-    holds the lock only while it executes Python code. Call it after the drawing workers are
-    forked: a fork while another thread imports could leave the child's import lock held.
-    """
-    import importlib
-    import threading
-
-    def load() -> None:
-        for name in _WRITER_MODULES:
-            try:
-                importlib.import_module(name)
-            except Exception as exc:  # pragma: no cover - reported again where it is used
-                log.debug("could not preload %s: %s", name, exc)
-
-    thread = threading.Thread(target=load, name="meshplan-preload", daemon=True)
-    _PRELOADING[:] = [t for t in _PRELOADING if t.is_alive()] + [thread]
-    thread.start()
-    return thread
-
-
-#: Preloading threads that may still run: a :class:`RenderPool` waits for them before it forks.
-_PRELOADING: list = []
 
 
 def submit_early(pool: RenderPool | None, oriented: Oriented) -> EarlyDrawings | None:
