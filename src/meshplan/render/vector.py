@@ -19,6 +19,9 @@ The layout is the Agg drawing's (its text metrics, at the figure's resolution), 
 files agree with each other to a fraction of a point. A primitive this module does not know (a
 Gouraud-shaded or quad mesh: no plan draws one) makes :func:`figure_files` save that figure's
 vector formats with matplotlib instead.
+
+Why one long module: the recorder and the three writers share the recorded primitives (their
+classes, the path and number formatting) and nothing else uses them.
 """
 
 from __future__ import annotations
@@ -90,6 +93,9 @@ class Clip:
 
 @dataclass(frozen=True)
 class PathOp:
+    """A path as drawn: its vertices in points (y up) with matplotlib's path codes, painted
+    with ``style`` inside ``clip``."""
+
     vertices: np.ndarray  # (N, 2) points, y up
     codes: np.ndarray  # (N,) matplotlib path codes (uint8)
     style: Style
@@ -98,6 +104,9 @@ class PathOp:
 
 @dataclass(frozen=True)
 class TextOp:
+    """A line of text as drawn: from its baseline's start (points, y up), turned by ``angle``,
+    in the font of ``prop``; ``anchor`` is where matplotlib's SVG would anchor it."""
+
     x: float  # baseline start, points, y up
     y: float
     angle: float  # degrees counter-clockwise
@@ -111,6 +120,9 @@ class TextOp:
 
 @dataclass(frozen=True)
 class ImageOp:
+    """An image as drawn: its RGBA pixels placed on the rectangle of its lower left corner
+    and size (points)."""
+
     x: float  # lower left, points
     y: float
     width: float
