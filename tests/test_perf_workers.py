@@ -1,6 +1,6 @@
 """The drawing pool's shape on few cores (issue 15): the run counts as one of its drawing
-processes (on 2 cores, one worker beside it), one worker makes each drafting figure once for
-its three files, and every file is the same, byte for byte, whichever process makes it."""
+processes (on 2 cores, one worker beside it), each drafting figure is made once for its three
+files, and every file is the same, byte for byte, whichever process makes it."""
 
 from __future__ import annotations
 
@@ -24,22 +24,21 @@ def test_render_pool_counts_the_run_as_one_of_its_processes():
         assert two.workers == 2
 
 
-def test_drafting_figure_made_once_without_a_second_worker(computed):
-    """Two workers or more draw a drafting plan's raster and vector files at once (two jobs);
-    one worker, or the run alone, makes the figure once for the three."""
+def test_drafting_figure_made_once_for_its_three_files(computed):
+    """A drafting plan is one job for its three files, whatever the workers: its figure is
+    drawn once for all of them (meshplan.render.vector), so that splitting its formats between
+    two workers would build and draw it twice."""
     from meshplan import export
 
     _, result = computed("apartment", 1)
-    for workers in (0, 1):
+    for workers in (0, 1, 2, 3):
         jobs, _ = export._jobs(result, workers)
         assert [j[7] for j in jobs if j[0] is export._drafting_files] == [("png", "svg", "pdf")]
-    jobs, _ = export._jobs(result, 2)
-    assert [j[7] for j in jobs if j[0] is export._drafting_files] == [("png",), ("svg", "pdf")]
 
 
 def test_one_worker_makes_the_files_the_run_alone_makes(computed):
     """With one worker every file is the one the run makes alone (and the one two workers
-    make, which split the drafting plan's formats), the report included (no timings here)."""
+    make), the report included (no timings here)."""
     from meshplan.export import RenderPool, render_files
 
     _, result = computed("apartment", 1)
@@ -53,3 +52,4 @@ def test_one_worker_makes_the_files_the_run_alone_makes(computed):
     assert sorted(here) == sorted(there) == sorted(split)
     for name in here:
         assert here[name] == there[name] == split[name], name
+

@@ -201,7 +201,8 @@ def test_imperial_sheet_is_all_feet_and_inches(computed):
     (_, fig), *_ = _figures(result, imperial=True)
     FigureCanvasAgg(fig).draw()
     ax = fig.axes[0]
-    ticks = [t.get_text() for t in ax.get_xticklabels() + ax.get_yticklabels() if t.get_text()]
+    # the coordinate ticks' labels (drawn as texts of their own: render.sheet._static_ticks)
+    ticks = [t.get_text() for t in ax.texts if getattr(t, "meshplan_role", None) == "tick-label" and t.get_text()]
     assert ticks and all("'-" in t and '"' in t for t in ticks), ticks
     labels = [t.get_text() for t in ax.texts if getattr(t, "meshplan_role", None) in ("room-label", "dimension")]
     assert labels and not any("m²" in t for t in labels)

@@ -191,6 +191,7 @@ def test_a_run_with_workers_writes_what_a_run_alone_writes(apartment, tmp_path):
     models and DXF files itself meanwhile: every file is the same, byte for byte, as a run
     that draws everything in one process (the report and plan.json aside: they show timings)."""
     import meshplan
+    import meshplan.api  # the module patched below (meshplan.run imports it only when called)
     from meshplan import export
 
     submitted: list = []

@@ -18,6 +18,7 @@ from ..io import staged_directory
 from ..render import (
     drafting_figure,
     figure_bytes,
+    figure_files,
     levels_figure,
     make_sheet,
     normals_figure,
@@ -31,12 +32,23 @@ from .planjson import dumps, plan_document, plan_schema
 from .report import report_html, report_page
 
 if TYPE_CHECKING:  # pragma: no cover
+    from ..plan import PenAndInkPlan
     from ..render.sheet import Sheet
     from ..result import Result, _Timer
 
 log = logging.getLogger(__name__)
 
-__all__ = ["EarlyDrawings", "RenderPool", "Written", "dumps", "plan_document", "plan_schema", "render_files", "submit_early", "write_results"]
+__all__ = [
+    "EarlyDrawings",
+    "RenderPool",
+    "Written",
+    "dumps",
+    "plan_document",
+    "plan_schema",
+    "render_files",
+    "submit_early",
+    "write_results",
+]
 
 
 # ---------------------------------------------------------------------------------------------
@@ -47,14 +59,14 @@ __all__ = ["EarlyDrawings", "RenderPool", "Written", "dumps", "plan_document", "
 
 def _pen_files(plan, annotations, sheet, params, n_stories: int, fmts: tuple[str, ...], scan: str = "", north_deg: float = 0.0) -> dict[str, bytes]:
     fig = pen_and_ink_figure(plan, annotations, sheet, params, n_stories, scan=scan, north_deg=north_deg)
-    return {f"pen-and-ink-{plan.story.index}.{fmt}": figure_bytes(fig, fmt) for fmt in fmts}
+    return {f"pen-and-ink-{plan.story.index}.{fmt}": data for fmt, data in figure_files(fig, fmts).items()}
 
 
 def _drafting_files(
     plan, annotations, sheet, params, n_stories: int, symbols, fmts: tuple[str, ...], scan: str = "", north_deg: float = 0.0
 ) -> dict[str, bytes]:
     fig = drafting_figure(plan, annotations, sheet, params, n_stories, symbols, scan=scan, north_deg=north_deg)
-    return {f"drafting-{plan.story.index}.{fmt}": figure_bytes(fig, fmt) for fmt in fmts}
+    return {f"drafting-{plan.story.index}.{fmt}": data for fmt, data in figure_files(fig, fmts).items()}
 
 
 def _segments_files(centroids, walls, story: int, sheet, params, n_stories: int) -> dict[str, bytes]:
@@ -112,11 +124,21 @@ def _early_jobs(oriented: Oriented) -> list[tuple]:
     n = len(o.stories)
     scan, north = _title(oriented)
     jobs: list[tuple] = [
-        (_pen_files, pen, ann, _sheet(oriented, story.index), params, n, ("png", "svg", "pdf"), scan, north)
+        (_pen_files, _drawn_slices(pen), ann, _sheet(oriented, story.index), params, n, ("png", "svg", "pdf"), scan, north)
         for story, pen, ann in zip(o.stories, oriented.pen_and_ink, oriented.story_annotations, strict=True)
     ]
-    jobs += [(_normals_files, mesh.face_normals, mesh.face_areas, o), (_levels_files, o, params)]
+    # the figures read the orientation's levels, stories and wall directions, not its per-face
+    # arrays (2.7 MB of the 300k-face apartment's, pickled to the worker for each figure)
+    light = replace(o, face_story=o.face_story[:0], flipped=o.flipped[:0])
+    jobs += [(_normals_files, mesh.face_normals, mesh.face_areas, light), (_levels_files, light, params)]
     return jobs
+
+
+def _drawn_slices(pen: PenAndInkPlan) -> PenAndInkPlan:
+    """``pen`` with what its drawing reads of the slices alone: the segments and their planes,
+    not the face each segment cuts. The plan is pickled to a worker: 17.3 MB on the 300k-face
+    apartment (0.07 s to pickle in the run, as long to unpickle in the worker), 14.4 MB so."""
+    return replace(pen, slices=replace(pen.slices, face=pen.slices.face[:0]))
 
 
 def _oriented_of(result: Result) -> Oriented:
@@ -139,8 +161,9 @@ def _sheet(oriented: Oriented | Result, story: int) -> Sheet:
 
 def _jobs(result: Result, workers: int = 2) -> tuple[list[tuple], list[tuple]]:
     """``(function, *arguments)`` of the drawings that need the walls and rooms (the drafting
-    plans, the wall segments), slowest first, for ``workers`` drawing workers, and of the DXF
-    files."""
+    plans, the wall segments), slowest first, and of the DXF files. The jobs are the same for
+    any number of ``workers`` (kept for the callers: the drafting plans were split between two
+    workers before each figure was drawn once for its files)."""
     params = result.options.render
     n = len(result.stories)
     jobs: list[tuple] = []
@@ -150,12 +173,10 @@ def _jobs(result: Result, workers: int = 2) -> tuple[list[tuple], list[tuple]]:
         i = sp.story.index
         sheet = _sheet(result, i)
         symbols = sp.symbols
-        # the drafting plan is what the run waits for once its stages are done: with two
-        # workers or more its raster and its vector files are drawn by two at once (the figure
-        # is made by both, a tenth of the job; 0.25 s sooner on the 300k-face apartment); with
-        # one worker or none the figure is made once for the three
-        for fmts in (("png",), ("svg", "pdf")) if workers > 1 else (("png", "svg", "pdf"),):
-            jobs.append((_drafting_files, sp.drafting, sp.annotations, sheet, params, n, symbols, fmts, scan, north))
+        # one job per drafting plan, whatever the workers: its figure is drawn once for its
+        # three files (render.vector), so that two workers splitting its formats would each
+        # build and draw it (before, two workers drew its raster and vector files at once)
+        jobs.append((_drafting_files, sp.drafting, sp.annotations, sheet, params, n, symbols, ("png", "svg", "pdf"), scan, north))
         jobs.append((_segments_files, result.mesh.face_centroids, result.walls, i, sheet, params, n))
         rooms = [r for r in result.rooms if r.story == i]
         dxf.append((_dxf_files, i, sp.drafting.slices.segments, sp.reference, sp.annotations, symbols, rooms))
@@ -280,7 +301,8 @@ def _warm_up() -> None:
 
 
 def _warm_matplotlib() -> None:
-    """Draw and save one small figure in every format (see :func:`_warm_up`)."""
+    """Draw one small figure and write it in every format, once (see :func:`_warm_up`): the
+    fonts are found and loaded, Agg and the direct SVG and PDF writers imported."""
     from matplotlib.figure import Figure
 
     fig = Figure(figsize=(1.0, 1.0), dpi=30)
@@ -288,8 +310,7 @@ def _warm_matplotlib() -> None:
     ax.plot([0.0, 1.0], [0.0, 1.0])
     ax.set_xlabel("x (m)", fontsize=6)
     fig.text(0.1, 0.9, "Plan 1.00 m²", fontsize=9, weight="bold")
-    for fmt in ("png", "pdf", "svg"):
-        figure_bytes(fig, fmt)
+    figure_files(fig, ("png", "pdf", "svg"))
 
 
 def _processes(params) -> int:

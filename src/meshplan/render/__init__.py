@@ -16,7 +16,7 @@ from .params import RenderParams
 if TYPE_CHECKING:  # pragma: no cover
     from .plans import drafting_figure, pen_and_ink_figure, pen_and_ink_raster, segments_figure
     from .plots import levels_figure, normals_figure
-    from .sheet import Sheet, figure_bytes, make_sheet
+    from .sheet import Sheet, figure_bytes, figure_files, make_sheet
 
 #: Where each lazily loaded name lives (a submodule of this package).
 _EXPORTS = {
@@ -28,6 +28,7 @@ _EXPORTS = {
     "normals_figure": "plots",
     "Sheet": "sheet",
     "figure_bytes": "sheet",
+    "figure_files": "sheet",
     "make_sheet": "sheet",
 }
 
@@ -36,6 +37,7 @@ __all__ = [
     "Sheet",
     "drafting_figure",
     "figure_bytes",
+    "figure_files",
     "levels_figure",
     "make_sheet",
     "normals_figure",

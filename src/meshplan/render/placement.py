@@ -35,10 +35,13 @@ def tag(text, role: str):
 
 
 def renderer_of(fig):
-    """The Agg renderer of ``fig`` (made once), to measure texts with."""
+    """The Agg renderer of ``fig`` (made once), to measure texts with: the one the figure is
+    then drawn with (:class:`meshplan.render.vector.PlanCanvas`), which measures each text once."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
 
-    canvas = fig.canvas if isinstance(fig.canvas, FigureCanvasAgg) else FigureCanvasAgg(fig)
+    from .vector import PlanCanvas
+
+    canvas = fig.canvas if isinstance(fig.canvas, FigureCanvasAgg) else PlanCanvas(fig)
     return canvas.get_renderer()
 
 

@@ -11,7 +11,6 @@ the page's geometry.
 
 from __future__ import annotations
 
-import io
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -211,12 +210,12 @@ def new_figure(sheet: Sheet, title: str, params: RenderParams):
     else:
         ax.xaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
         ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
-    ax.tick_params(labelsize=6, length=2, width=0.4, colors="#555555")
     for s in ax.spines.values():
         s.set_linewidth(0.4)
-        s.set_color("#999999")
-    ax.set_xlabel(f"x ({'ft' if params.imperial else 'm'})", fontsize=6, color="#555555", labelpad=1)
-    ax.set_ylabel(f"z ({'ft' if params.imperial else 'm'})", fontsize=6, color="#555555", labelpad=1)
+        s.set_color(_SPINE_COLOR)
+    ax.set_xlabel(f"x ({'ft' if params.imperial else 'm'})", fontsize=_TICK_LABEL_PT, color=_TICK_COLOR, labelpad=_AXIS_LABEL_PAD_PT)
+    ax.set_ylabel(f"z ({'ft' if params.imperial else 'm'})", fontsize=_TICK_LABEL_PT, color=_TICK_COLOR, labelpad=_AXIS_LABEL_PAD_PT)
+    _static_ticks(ax)
     fig.text(left / fw, 1 - 0.18 / fh, title, fontsize=9, va="top", ha="left", weight="bold")
     fig.text(
         left / fw,
@@ -228,6 +227,71 @@ def new_figure(sheet: Sheet, title: str, params: RenderParams):
         color="#555555",
     )
     return fig, ax
+
+
+#: The sheet's coordinate ticks: marks 2 points long and 0.4 wide outside the drawing, labels
+#: of 6 points 3.5 points beyond them (matplotlib's default pad), the axis names 1 point
+#: beyond the labels; grey, as the frame.
+_TICK_LENGTH_PT = 2.0
+_TICK_WIDTH_PT = 0.4
+_TICK_PAD_PT = 3.5
+_TICK_LABEL_PT = 6.0
+_AXIS_LABEL_PAD_PT = 1.0
+_TICK_COLOR = "#555555"
+_SPINE_COLOR = "#999999"
+
+
+def _static_ticks(ax) -> None:
+    """The sheet's coordinate ticks drawn as one line of tick marks and a text per label, each
+    axis's name placed beyond them, where matplotlib's own ticks were (the same marks, texts,
+    transforms and distances; the PNG pixel for pixel).
+
+    matplotlib's ticks are objects of two lines and two texts each, made anew at every drawing
+    with their positions, and the axis names placed after measuring every label: about a sixth
+    of a drafting plan's drawing time. The plan's limits are fixed once the figure is made, so
+    the ticks are worked out once, here. The labels are tagged ``tick-label``.
+    """
+    from matplotlib.lines import Line2D
+    from matplotlib.markers import MarkerStyle
+    from matplotlib.ticker import NullLocator
+    from matplotlib.transforms import Bbox, ScaledTranslation
+
+    from .placement import renderer_of, tag
+
+    fig = ax.figure
+    renderer = renderer_of(fig)
+    ax.apply_aspect()  # the frame where it is drawn (the ticks' number follows its length)
+    pad = (_TICK_PAD_PT + _TICK_LENGTH_PT) / 72.0  # from the frame to the labels (inches)
+    # the marks as matplotlib's ticks out of the frame: TICKDOWN (3) below, TICKLEFT (0) left
+    specs = (
+        (ax.xaxis, ax.get_xaxis_transform(), MarkerStyle(3), ScaledTranslation(0.0, -pad, fig.dpi_scale_trans), dict(ha="center", va="top")),
+        (ax.yaxis, ax.get_yaxis_transform(), MarkerStyle(0), ScaledTranslation(-pad, 0.0, fig.dpi_scale_trans), dict(ha="right", va="center_baseline")),
+    )
+    for axis, along, marker, shift, align in specs:
+        locs = np.asarray(axis.get_majorticklocs(), dtype=np.float64)
+        labels = axis.major.formatter.format_ticks(locs)
+        lo, hi = sorted(axis.get_view_interval())
+        tol = 1e-10 * (hi - lo)  # matplotlib's: ticks at the limits up to rounding are drawn
+        shown = [(v, t) for v, t in zip(locs.tolist(), labels) if lo - tol <= v <= hi + tol]
+        axis.set_major_locator(NullLocator())
+        xy = ([v for v, _ in shown], [0.0] * len(shown))
+        line = Line2D(*(xy if axis is ax.xaxis else xy[::-1]), transform=along, marker=marker, markersize=_TICK_LENGTH_PT,
+                      markeredgewidth=_TICK_WIDTH_PT, color=_TICK_COLOR, markeredgecolor=_TICK_COLOR, linestyle="none", zorder=1.5, clip_on=False)  # fmt: skip
+        ax.add_line(line)
+        texts = []
+        for v, t in shown:
+            x, y = (v, 0.0) if axis is ax.xaxis else (0.0, v)
+            texts.append(tag(ax.text(x, y, t, transform=along + shift, fontsize=_TICK_LABEL_PT, color=_TICK_COLOR, zorder=1.5, **align), "tick-label"))
+        # the axis name beyond the labels and the frame, as matplotlib places it
+        spine = ax.spines["bottom" if axis is ax.xaxis else "left"].get_window_extent(renderer)
+        box = Bbox.union([*(t.get_window_extent(renderer) for t in texts), spine])
+        frame = ax.transAxes.transform([(0.0, 0.0)])[0]
+        if axis is ax.xaxis:
+            beyond = (frame[1] - box.y0) / fig.dpi + _AXIS_LABEL_PAD_PT / 72.0
+            axis.set_label_coords(0.5, 0.0, transform=ax.transAxes + ScaledTranslation(0.0, -beyond, fig.dpi_scale_trans))
+        else:
+            beyond = (frame[0] - box.x0) / fig.dpi + _AXIS_LABEL_PAD_PT / 72.0
+            axis.set_label_coords(0.0, 0.5, transform=ax.transAxes + ScaledTranslation(-beyond, 0.0, fig.dpi_scale_trans))
 
 
 def _paper_name(sheet: Sheet) -> str:
@@ -578,19 +642,17 @@ def ink_rgba(counts: np.ndarray, opacity: float, color: str = "#14213d", width_p
     return lut.view(np.uint32)[c].view(np.uint8).reshape(*c.shape, 4)
 
 
-_RC: dict[RcKeyType, Any] = {"svg.fonttype": "none", "svg.hashsalt": "meshplan", "pdf.compression": 1, "path.simplify": True}
+_RC: dict[RcKeyType, Any] = {"path.simplify": True}
+
+
+def figure_files(fig, fmts) -> dict[str, bytes]:
+    """``format -> bytes`` of a figure in each of ``fmts`` (PNG, SVG, PDF), drawn once for all
+    of them (:mod:`.vector`), without timestamps (byte-reproducible)."""
+    from .vector import figure_files as files
+
+    return files(fig, fmts)
+
 
 def figure_bytes(fig, fmt: str) -> bytes:
     """Render a figure to PNG, SVG or PDF bytes, without timestamps (byte-reproducible)."""
-    import matplotlib
-
-    meta = {
-        "png": {"Software": "meshplan"},
-        "svg": {"Date": None, "Creator": "meshplan"},
-        "pdf": {"CreationDate": None, "Creator": "meshplan", "Producer": "meshplan"},
-    }[fmt]
-    buf = io.BytesIO()
-    with matplotlib.rc_context(_RC):
-        kwargs = {"pil_kwargs": {"compress_level": 1}} if fmt == "png" else {}
-        fig.savefig(buf, format=fmt, metadata=meta, **kwargs)
-    return buf.getvalue()
+    return figure_files(fig, (fmt,))[fmt]
