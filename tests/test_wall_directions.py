@@ -195,3 +195,34 @@ def test_panel_against_a_wall_is_kept_as_part_of_the_network() -> None:
     a, b = _to_plan(o, [[3.0, 0.0], [3.0, 0.8]])
     angle, ends = _match(walls, a, b)
     assert angle <= ANGLE_TOL_DEG and ends <= END_TOL_M
+
+
+def _faces_facing(azimuth_deg, n: int, area: float, where) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    a = np.radians(np.asarray(azimuth_deg, float)) * np.ones(n)
+    normals = np.c_[np.cos(a), np.zeros(n), np.sin(a)]
+    return normals, np.full(n, area / n), np.c_[where[:, 0], np.full(n, 1.0), where[:, 1]]
+
+
+def test_a_short_wall_at_an_angle_gets_a_direction_where_its_faces_lie_in_one_plane() -> None:
+    """A 45-degree chamfer 1 m long seen to 1.4 m (1.4 m2, under the 2 m2 that the scatter of a
+    decimated scan's normals drowns) among 30 m2 of faces facing every which way: its faces lie
+    in one plane, the scatter's do not. Without the faces' positions it is not found."""
+    from types import SimpleNamespace
+
+    from meshplan.walls.flat import wall_directions
+
+    rng = np.random.default_rng(1)
+    t = rng.uniform(0.0, 1.0, 200)
+    line = np.c_[3.0 + 0.707 * t, 0.707 * t]  # the chamfer's centroids, on one line
+    chamfer = _faces_facing(-45.0 + rng.normal(0.0, 2.0, 200), 200, 1.4, line)
+    scatter = _faces_facing(rng.uniform(0.0, 360.0, 3000), 3000, 30.0, rng.uniform(0.0, 8.0, (3000, 2)))
+    normals, areas, centroids = (np.concatenate([c, s]) for c, s in zip(chamfer, scatter))
+    orientation = SimpleNamespace(alignment=SimpleNamespace(directions=()))
+
+    def found(*args) -> bool:
+        dirs = wall_directions(orientation, "auto", *args)
+        return bool(np.any(dirs @ np.array([np.cos(np.radians(-45.0)), np.sin(np.radians(-45.0))]) > np.cos(np.radians(5.0))))
+
+    assert found(normals, areas, 25.0, centroids)
+    assert not found(normals, areas, 25.0)
+    assert not found(scatter[0], scatter[1], 25.0, scatter[2])  # the scatter alone: no wall

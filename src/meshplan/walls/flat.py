@@ -279,6 +279,7 @@ def wall_directions(
     normals: FloatArray | None = None,
     areas: FloatArray | None = None,
     facing_tolerance_deg: float = 25.0,
+    centroids: FloatArray | None = None,
 ) -> FloatArray:
     """``(D, 2)`` unit plan normals [nx, nz] the DBSCAN runs on.
 
@@ -308,6 +309,7 @@ def wall_directions(
     found = len(out) > 4 or mode == "all"
     centres = np.radians(np.arange(360) + 0.5)
     compass = np.c_[np.cos(centres), np.sin(centres)]
+    where = centroids[vertical][:, [0, 2]] if centroids is not None else None
     for _ in range(16):  # at most 16 directions more: one every 22 degrees
         left = _row_max(plan @ np.array(out).T) < cos_tol
         if not left.any():
@@ -316,15 +318,49 @@ def wall_directions(
         smooth = np.sum([np.roll(hist, k) for k in range(-5, 6)], axis=0)  # +-5 degrees
         uncovered = _row_max(compass @ np.array(out).T) < cos_tol
         background = 11.0 * float(hist[uncovered].mean()) if uncovered.any() else 0.0
-        j = int(np.argmax(smooth))
-        if smooth[j] < FILL_MIN_AREA_M2 or smooth[j] < FILL_PEAK_RATIO * background:
+        chosen = None
+        # the peaks in order of area: the first that stands out of the scatter, or (given
+        # the faces' positions) whose faces lie in one plane, as a wall's do
+        least = FILL_MIN_PLANE_M2 if where is not None else FILL_MIN_AREA_M2
+        peaks = np.flatnonzero((smooth >= np.roll(smooth, 1)) & (smooth > np.roll(smooth, -1)) & (smooth >= least))
+        for j in peaks[np.argsort(-smooth[peaks], kind="stable")]:
+            near = left & (np.abs((az - (j + 0.5) + 180.0) % 360.0 - 180.0) <= 5.0)
+            mean = np.arctan2((w[near] * plan[near, 1]).sum(), (w[near] * plan[near, 0]).sum())
+            d = np.array([np.cos(mean), np.sin(mean)])
+            if (smooth[j] >= FILL_MIN_AREA_M2 and smooth[j] >= FILL_PEAK_RATIO * background) or (
+                where is not None and _planar_area(where[near], w[near], d) >= FILL_MIN_PLANE_M2
+            ):
+                chosen = d
+                break
+            if where is None:
+                break  # the largest peak only, as without positions
+        if chosen is None:
             break
-        # the area-weighted mean azimuth of the faces within 5 degrees of the peak
-        near = left & (np.abs((az - (j + 0.5) + 180.0) % 360.0 - 180.0) <= 5.0)
-        mean = np.arctan2((w[near] * plan[near, 1]).sum(), (w[near] * plan[near, 0]).sum())
-        out.append(np.array([np.cos(mean), np.sin(mean)]))
+        out.append(chosen)
         found = True
     return np.array(out) if found else axes
+
+
+#: ... or when this much area (m2) of them lies in one plane (:func:`_planar_area`): a wall 0.8 m
+#: long seen to 1.5 m (a scan that stopped there), more than a door leaf's one face.
+FILL_MIN_PLANE_M2 = 1.2
+
+#: Width (m) of the band across a direction in which faces count as one plane for
+#: :func:`_planar_area`: the scatter of a wall's faces on a noisy, decimated scan (1-2 cm of
+#: noise, 25 cm triangles) and the bow of a drifted one.
+FILL_PLANE_BAND_M = 0.15
+
+
+def _planar_area(points: FloatArray, weights: FloatArray, direction: FloatArray) -> float:
+    """The largest area of faces (plan ``points``, ``weights``) whose positions along
+    ``direction`` lie within one band :data:`FILL_PLANE_BAND_M` wide: what of them one plane holds."""
+    if not len(points):
+        return 0.0
+    v = np.sort(points @ direction)
+    order = np.argsort(points @ direction, kind="stable")
+    cw = np.r_[0.0, np.cumsum(weights[order])]
+    hi = np.searchsorted(v, v + FILL_PLANE_BAND_M, side="right")
+    return float(np.max(cw[hi] - cw[np.arange(len(v))]))
 
 
 def _row_max(a: FloatArray) -> FloatArray:
@@ -953,7 +989,10 @@ def find_flat_walls(mesh: Mesh, orientation: Orientation, params: WallParams | N
     """
     params = params or WallParams()
     in_stories = orientation.face_story >= 0
-    dirs = wall_directions(orientation, params.wall_directions, mesh.face_normals[in_stories], mesh.face_areas[in_stories], params.facing_tolerance_deg)
+    dirs = wall_directions(
+        orientation, params.wall_directions, mesh.face_normals[in_stories], mesh.face_areas[in_stories], params.facing_tolerance_deg,
+        mesh.face_centroids[in_stories],
+    )
     width = params.box_length_m / 2  # columns: the resolution along the wall of a DBSCAN box
     cos_tol = np.cos(np.radians(params.facing_tolerance_deg))
     # DBSCAN counts centroids: faces larger than the box (parametric models) are split so that
