@@ -460,3 +460,193 @@ def plan_rasters(tri, centroid, level, on_floor, ceiling, capped, cell):  # prag
             if on_floor[f]:
                 floor_cells[c] = 1.0
     return x0, z0, top.reshape(ni, nk), shelf.reshape(ni, nk), floor_cells.reshape(ni, nk)
+
+
+# ---------------------------------------------------------------------------------------------
+# Reading a scan: coincident vertices merged, unusable and repeated faces dropped, in few passes
+# (meshplan.io.mesh.clean_mesh).
+
+
+@njit(cache=True, nogil=True)
+def _sort_by(keys, order, s, e, col):  # pragma: no cover - compiled
+    """Sort ``order[s:e]`` by ``keys[:, col]`` (an insertion sort for a short run)."""
+    m = e - s
+    if m <= 16:
+        for i in range(s + 1, e):
+            x = order[i]
+            v = keys[x, col]
+            j = i - 1
+            while j >= s and keys[order[j], col] > v:
+                order[j + 1] = order[j]
+                j -= 1
+            order[j + 1] = x
+        return
+    vals = np.empty(m, np.int64)
+    for i in range(m):
+        vals[i] = keys[order[s + i], col]
+    o = np.argsort(vals)
+    run = order[s:e].copy()
+    for i in range(m):
+        order[s + i] = run[o[i]]
+
+
+@njit(cache=True, nogil=True)
+def lexsort_rows(keys, order):  # pragma: no cover - compiled
+    """``order`` (indices sorting ``keys[:, 0]``, an (N, C) int64 array) made to sort the rows
+    lexicographically, in place: column by column, each run of rows equal in the columns so far
+    sorted by the next. The order of equal rows is left as it comes (callers merge them).
+    (No recursion: numba's cache does not keep recursive kernels reliably.)"""
+    n = order.shape[0]
+    for col in range(1, keys.shape[1]):
+        i = 0
+        while i < n:
+            j = i + 1
+            while j < n:
+                same = True
+                for c in range(col):
+                    if keys[order[j], c] != keys[order[i], c]:
+                        same = False
+                        break
+                if not same:
+                    break
+                j += 1
+            if j - i > 1:
+                _sort_by(keys, order, i, j, col)
+            i = j
+    return order
+
+
+@njit(cache=True, nogil=True)
+def unique_sorted_rows(keys, order):  # pragma: no cover - compiled
+    """The first of each run of equal rows of ``keys`` in ``order`` (lexicographically sorted
+    indices) and the rank of the run of every row: ``keys[first]`` are the unique rows in order,
+    ``inverse`` maps each row to its own."""
+    n = order.shape[0]
+    inverse = np.empty(n, np.int64)
+    first = np.empty(n, np.int64)
+    u = -1
+    for i in range(n):
+        r = order[i]
+        new = i == 0
+        if not new:
+            p = order[i - 1]
+            for c in range(keys.shape[1]):
+                if keys[r, c] != keys[p, c]:
+                    new = True
+                    break
+        if new:
+            u += 1
+            first[u] = r
+        inverse[r] = u
+    return first[: u + 1].copy(), inverse
+
+
+#: Most kept faces on one lowest vertex that :func:`clean_faces` compares a face with before it
+#: gives up its chains for a hash table: a scanned surface puts 2-3 faces on a vertex, a fan
+#: (a disc, a cone) a few hundred; a hub of 100k faces would make the chains quadratic.
+CLEAN_MAX_CHAIN = 1024
+
+
+@njit(cache=True, nogil=True)
+def clean_faces(vertices, inverse, faces, min_area, hashed):  # pragma: no cover - compiled
+    """The faces of ``faces`` renumbered by ``inverse`` (onto the merged ``vertices``), their
+    corners and cross products ``(t1 - t0) x (t2 - t0)`` (numpy's operations in numpy's order),
+    and which to keep: not degenerate (a repeated vertex, or an area not above ``min_area``) and
+    not a repeat of an earlier kept face (the same three vertices in any order). Also returns
+    which vertices the kept faces use, the counts of degenerate and repeated faces, and whether
+    it finished (see below).
+
+    Repeats are found without sorting the faces. Unless ``hashed``, each kept face is chained to
+    its lowest vertex (``head``, ``chain``), and a face is compared with the kept faces on its
+    lowest vertex only (two or three on a scanned surface; a vertex's faces lie close in a scan's
+    face order, so the chains stay in the cache, where a hash table of the faces misses it at
+    every face: 0.1 s against 0.35 s at 3M faces). A chain longer than :data:`CLEAN_MAX_CHAIN`
+    stops the pass (``finished`` False): the caller runs it again ``hashed``, with a hash table
+    of the sorted vertex triples, linear in the faces whatever their fans."""
+    n = faces.shape[0]
+    out = np.empty((n, 3), np.int64)
+    tri = np.empty((n, 3, 3), np.float64)
+    cross = np.empty((n, 3), np.float64)
+    keep = np.zeros(n, np.bool_)
+    used = np.zeros(vertices.shape[0], np.bool_)
+    head = np.full(0 if hashed else vertices.shape[0], -1, np.int64)
+    chain = np.empty(0 if hashed else n, np.int64)
+    size = 1
+    while hashed and size < 2 * n:
+        size *= 2
+    table = np.full(size if hashed else 0, -1, np.int64)
+    mask = np.uint64(size - 1)
+    degenerate = 0
+    repeated = 0
+    for f in range(n):
+        a = inverse[faces[f, 0]]
+        b = inverse[faces[f, 1]]
+        c = inverse[faces[f, 2]]
+        out[f, 0] = a
+        out[f, 1] = b
+        out[f, 2] = c
+        for k in range(3):
+            tri[f, 0, k] = vertices[a, k]
+            tri[f, 1, k] = vertices[b, k]
+            tri[f, 2, k] = vertices[c, k]
+        a0 = tri[f, 1, 0] - tri[f, 0, 0]
+        a1 = tri[f, 1, 1] - tri[f, 0, 1]
+        a2 = tri[f, 1, 2] - tri[f, 0, 2]
+        b0 = tri[f, 2, 0] - tri[f, 0, 0]
+        b1 = tri[f, 2, 1] - tri[f, 0, 1]
+        b2 = tri[f, 2, 2] - tri[f, 0, 2]
+        x = a1 * b2 - a2 * b1
+        y = a2 * b0 - a0 * b2
+        z = a0 * b1 - a1 * b0
+        cross[f, 0] = x
+        cross[f, 1] = y
+        cross[f, 2] = z
+        area = 0.5 * np.sqrt(x * x + y * y + z * z)
+        if a == b or b == c or a == c or not (area > min_area):
+            degenerate += 1
+            continue
+        lo, mid, hi = a, b, c  # the sorted triple
+        if lo > mid:
+            lo, mid = mid, lo
+        if mid > hi:
+            mid, hi = hi, mid
+        if lo > mid:
+            lo, mid = mid, lo
+        seen = False
+        if hashed:
+            h = np.uint64(lo) * np.uint64(0x9E3779B97F4A7C15)  # multiplicative hashing (odd constants)
+            h ^= np.uint64(mid) * np.uint64(0xC2B2AE3D27D4EB4F)
+            h ^= np.uint64(hi) * np.uint64(0x165667B19E3779F9)
+            slot = np.int64((h ^ (h >> np.uint64(29))) & mask)
+            while table[slot] >= 0:
+                g = table[slot]
+                p, q, r = out[g, 0], out[g, 1], out[g, 2]
+                if (p == lo or q == lo or r == lo) and (p == mid or q == mid or r == mid) and (p == hi or q == hi or r == hi):
+                    seen = True
+                    break
+                slot = np.int64((np.uint64(slot) + np.uint64(1)) & mask)
+            if not seen:
+                table[slot] = f
+        else:
+            g = head[lo]
+            steps = 0
+            while g >= 0:
+                p, q, r = out[g, 0], out[g, 1], out[g, 2]
+                if (p == mid or q == mid or r == mid) and (p == hi or q == hi or r == hi):
+                    seen = True  # it holds lo too: the chain is lo's
+                    break
+                g = chain[g]
+                steps += 1
+                if steps > CLEAN_MAX_CHAIN:
+                    return out, tri, cross, keep, used, degenerate, repeated, False
+            if not seen:
+                chain[f] = head[lo]
+                head[lo] = f
+        if seen:
+            repeated += 1
+            continue
+        keep[f] = True
+        used[a] = True
+        used[b] = True
+        used[c] = True
+    return out, tri, cross, keep, used, degenerate, repeated, True
