@@ -650,3 +650,120 @@ def clean_faces(vertices, inverse, faces, min_area, hashed):  # pragma: no cover
         used[b] = True
         used[c] = True
     return out, tri, cross, keep, used, degenerate, repeated, True
+
+
+# ---------------------------------------------------------------------------------------------
+# Making the normals face into the rooms (meshplan.orient.facing).
+
+
+@njit(cache=True, nogil=True)
+def component_labels(faces, n_vertices):  # pragma: no cover - compiled
+    """``(F,)`` connected piece of every face (faces sharing a vertex are connected), numbered in
+    the order of their lowest vertex, a vertex of no face counting as a piece of its own (as
+    ``scipy.sparse.csgraph.connected_components`` numbers the vertex graph's).
+
+    The union-find of :func:`face_components` keeps the lower root, so every vertex's parent is
+    at most the vertex itself: one pass in vertex order then labels every vertex by its root's
+    number (its parent's label is already final), where finding each face's root and numbering
+    the roots with numpy took three more passes."""
+    parent = np.arange(n_vertices)
+    for f in range(faces.shape[0]):
+        for e in range(2):
+            a = _root(parent, faces[f, e])
+            b = _root(parent, faces[f, e + 1])
+            if a < b:
+                parent[b] = a
+            elif b < a:
+                parent[a] = b
+    label = np.empty(n_vertices, np.int64)
+    count = 0
+    for v in range(n_vertices):
+        p = parent[v]
+        if p == v:
+            label[v] = count
+            count += 1
+        else:
+            label[v] = label[p]
+    out = np.empty(faces.shape[0], np.int64)
+    for f in range(faces.shape[0]):
+        out[f] = label[faces[f, 0]]
+    return out
+
+
+@njit(cache=True, nogil=True)
+def slab_votes(normal_y, heights, areas, floors, ceilings, tolerance, cos_horizontal):  # pragma: no cover - compiled
+    """``(F,)`` winding votes of the floor and ceiling faces and ``(F,)`` which faces are
+    horizontal (``|n_y| > cos_horizontal``): a horizontal face within ``tolerance`` of a floor
+    of ``floors`` votes its area times the sign of its ``n_y``, of a ceiling (``ceilings``, NaN
+    where a story has none) minus that; story by story, floor then ceiling, as the numpy
+    masks added them."""
+    n = normal_y.shape[0]
+    vote = np.zeros(n, np.float64)
+    horiz = np.zeros(n, np.bool_)
+    for f in range(n):
+        ny = normal_y[f]
+        if not (abs(ny) > cos_horizontal):
+            continue
+        horiz[f] = True
+        s = np.sign(ny)
+        v = 0.0
+        for k in range(floors.shape[0]):
+            if abs(heights[f] - floors[k]) < tolerance:
+                v += areas[f] * s
+            if abs(heights[f] - ceilings[k]) < tolerance:  # NaN: no ceiling, never near
+                v -= areas[f] * s
+        vote[f] = v
+    return vote, horiz
+
+
+@njit(cache=True, nogil=True)
+def _probe_floor(grid, x0, z0, x, z, cell):  # pragma: no cover - compiled
+    i = np.int64(np.floor(x / cell)) - x0
+    k = np.int64(np.floor(z / cell)) - z0
+    if i < 0 or i >= grid.shape[0] or k < 0 or k >= grid.shape[1]:
+        return 0.0
+    return 1.0 if grid[i, k] else 0.0
+
+
+@njit(cache=True, nogil=True)
+def wall_floor_votes(  # pragma: no cover - compiled
+    normals, centroids, heights, areas, horiz, candidates, floor, ceiling, tolerance, sin_vertical, probes, cell, out
+):
+    """One story's part of ``meshplan.orient.facing._wall_votes``, written into ``out``: the
+    near-vertical ``candidates`` between the story's ``floor`` and ``ceiling`` vote their area
+    times the floor found in front of their foot less the floor behind it, at each of
+    ``probes`` (m), on a grid of ``cell`` (m) marked by the story's floor faces (horizontal,
+    within ``tolerance`` of ``floor``). Nothing when the story has no floor face or no such wall."""
+    n = normals.shape[0]
+    lo0 = np.iinfo(np.int64).max
+    lo1 = np.iinfo(np.int64).max
+    hi0 = np.iinfo(np.int64).min
+    hi1 = np.iinfo(np.int64).min
+    floors = 0
+    for f in range(n):
+        if horiz[f] and abs(heights[f] - floor) < tolerance:
+            c0 = np.int64(np.floor(centroids[f, 0] / cell))
+            c1 = np.int64(np.floor(centroids[f, 2] / cell))
+            lo0, hi0 = min(lo0, c0), max(hi0, c0)
+            lo1, hi1 = min(lo1, c1), max(hi1, c1)
+            floors += 1
+    if floors == 0:
+        return
+    grid = np.zeros((hi0 - lo0 + 1, hi1 - lo1 + 1), np.bool_)
+    for f in range(n):
+        if horiz[f] and abs(heights[f] - floor) < tolerance:
+            grid[np.int64(np.floor(centroids[f, 0] / cell)) - lo0, np.int64(np.floor(centroids[f, 2] / cell)) - lo1] = True
+    for f in range(n):
+        if not (candidates[f] and abs(normals[f, 1]) < sin_vertical and heights[f] > floor and heights[f] < ceiling):
+            continue
+        u0 = normals[f, 0]
+        u1 = normals[f, 2]
+        norm = max(np.sqrt(u0 * u0 + u1 * u1), 1e-12)
+        u0 /= norm
+        u1 /= norm
+        x = centroids[f, 0]
+        z = centroids[f, 2]
+        v = 0.0
+        for d in probes:
+            v += _probe_floor(grid, lo0, lo1, x + d * u0, z + d * u1, cell) - _probe_floor(grid, lo0, lo1, x - d * u0, z - d * u1, cell)
+        out[f] = areas[f] * v
