@@ -164,7 +164,10 @@ class Mesh:
         cached = self.__dict__
         if "triangles" in cached and "_cross" in cached and det != 0:
             # as (3F, 3) and (F, 3) rows: one product each (a stack of 3x3 products is slower)
-            tri = (cached["triangles"].reshape(-1, 3) @ a3.T + m[:3, 3]).reshape(-1, 3, 3)
+            corners = cached["triangles"].reshape(-1, 3)
+            tri = np.matmul(corners, a3.T, out=np.empty_like(corners))  # no temporary: 216 MB at 3M faces
+            tri += m[:3, 3]
+            tri = tri.reshape(-1, 3, 3)
             if mirror:
                 tri = tri[:, ::-1].copy()
             cross = cached["_cross"] @ (abs(det) * np.linalg.inv(a3))  # rows: (|det| A^-T c)^T
