@@ -767,3 +767,56 @@ def wall_floor_votes(  # pragma: no cover - compiled
         for d in probes:
             v += _probe_floor(grid, lo0, lo1, x + d * u0, z + d * u1, cell) - _probe_floor(grid, lo0, lo1, x - d * u0, z - d * u1, cell)
         out[f] = areas[f] * v
+
+
+# ---------------------------------------------------------------------------------------------
+# Sorting
+
+
+#: Bits of :func:`stable_argsort_f64`'s radix digits: 2048 buckets stay in the cache while a
+#: pass scatters a million indices (16 bits: a third slower there, however fewer the passes).
+_RADIX_BITS = 11
+
+
+@njit(cache=True, nogil=True)
+def stable_argsort_f64(x):  # pragma: no cover - compiled
+    """``np.argsort(x, kind="stable")`` of a float64 array, by a least-significant-digit radix
+    sort (six passes of :data:`_RADIX_BITS` bits, a pass skipped where every key shares its
+    digit): linear, 2-5 times faster than numpy's timsort on the 0.1-1M unordered values of a
+    mesh's weighted medians. Numpy's order exactly: -0.0 sorts as 0.0, and NaN (of either sign)
+    after +inf, equal values (and all NaN) in the order they come."""
+    n = x.shape[0]
+    key = np.empty(n, np.uint64)
+    sign = np.uint64(1) << np.uint64(63)
+    for i in range(n):
+        v = x[i]
+        if v != v:
+            b = np.uint64(0xFFFFFFFFFFFFFFFF)  # every NaN last
+        else:
+            b = np.float64(v + 0.0).view(np.uint64)  # + 0.0: -0.0 as 0.0
+            b = ~b if b & sign else b | sign  # monotone: negatives reversed below positives
+        key[i] = b
+    order = np.arange(n)
+    tmp = np.empty(n, np.int64)
+    key2 = np.empty(n, np.uint64)
+    buckets = 1 << _RADIX_BITS
+    mask = np.uint64(buckets - 1)
+    count = np.empty(buckets + 1, np.int64)
+    for shift in range(0, 64, _RADIX_BITS):
+        s = np.uint64(shift)
+        count[:] = 0
+        for i in range(n):
+            count[np.int64((key[i] >> s) & mask) + 1] += 1
+        if count[1:].max() == n:  # every key shares this digit: the pass changes nothing
+            continue
+        for d in range(buckets):
+            count[d + 1] += count[d]
+        for j in range(n):  # the keys travel with their indices: read in order, not gathered
+            k = key[j]
+            d = np.int64((k >> s) & mask)
+            tmp[count[d]] = order[j]
+            key2[count[d]] = k
+            count[d] += 1
+        order, tmp = tmp, order
+        key, key2 = key2, key
+    return order

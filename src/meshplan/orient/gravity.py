@@ -314,6 +314,8 @@ def _surface_samples(mesh: Mesh, faces: np.ndarray, spacing: float, single: Floa
     """
     areas = mesh.face_areas[faces]
     k = np.clip(np.ceil(areas / spacing**2), 1, _ENCLOSURE_MAX_SAMPLES).astype(np.int64)
+    if k.max(initial=1) == 1:  # a scanned mesh: one point per face, each standing for its face (area / 1)
+        return (_single_samples(mesh) if single is None else single)[faces], areas
     start = np.cumsum(k) - k
     pts = np.empty((int(k.sum()), 3))
     one = k == 1
@@ -367,7 +369,10 @@ def common_wall_span(mesh: Mesh, axis: FloatArray, params: OrientParams, nh: Flo
 
 
 def _weighted_median(x: FloatArray, w: FloatArray) -> float:
-    order = np.argsort(x, kind="stable")
+    """The first ``x``, in stable sorted order, at which the cumulative weight reaches half."""
+    from .._kernels import stable_argsort_f64  # numba: loaded when first needed
+
+    order = stable_argsort_f64(np.ascontiguousarray(x, dtype=np.float64))  # numpy's stable order, by radix
     cum = np.cumsum(w[order])
     return float(x[order][min(int(np.searchsorted(cum, 0.5 * cum[-1])), len(x) - 1)])
 
