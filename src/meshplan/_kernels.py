@@ -717,45 +717,23 @@ def slab_votes(normal_y, heights, areas, floors, ceilings, tolerance, cos_horizo
 
 
 @njit(cache=True, nogil=True)
-def _probe_floor(grid, x0, z0, x, z, cell):  # pragma: no cover - compiled
-    i = np.int64(np.floor(x / cell)) - x0
-    k = np.int64(np.floor(z / cell)) - z0
+def _probe_floor(grid, lo0, lo1, x, z, cell):  # pragma: no cover - compiled
+    i = np.int64(np.floor(x / cell)) - lo0
+    k = np.int64(np.floor(z / cell)) - lo1
     if i < 0 or i >= grid.shape[0] or k < 0 or k >= grid.shape[1]:
         return 0.0
     return 1.0 if grid[i, k] else 0.0
 
 
 @njit(cache=True, nogil=True)
-def wall_floor_votes(  # pragma: no cover - compiled
-    normals, centroids, heights, areas, horiz, candidates, floor, ceiling, tolerance, sin_vertical, probes, cell, out
-):
-    """One story's part of ``meshplan.orient.facing._wall_votes``, written into ``out``: the
-    near-vertical ``candidates`` between the story's ``floor`` and ``ceiling`` vote their area
-    times the floor found in front of their foot less the floor behind it, at each of
-    ``probes`` (m), on a grid of ``cell`` (m) marked by the story's floor faces (horizontal,
-    within ``tolerance`` of ``floor``). Nothing when the story has no floor face or no such wall."""
-    n = normals.shape[0]
-    lo0 = np.iinfo(np.int64).max
-    lo1 = np.iinfo(np.int64).max
-    hi0 = np.iinfo(np.int64).min
-    hi1 = np.iinfo(np.int64).min
-    floors = 0
-    for f in range(n):
-        if horiz[f] and abs(heights[f] - floor) < tolerance:
-            c0 = np.int64(np.floor(centroids[f, 0] / cell))
-            c1 = np.int64(np.floor(centroids[f, 2] / cell))
-            lo0, hi0 = min(lo0, c0), max(hi0, c0)
-            lo1, hi1 = min(lo1, c1), max(hi1, c1)
-            floors += 1
-    if floors == 0:
-        return
-    grid = np.zeros((hi0 - lo0 + 1, hi1 - lo1 + 1), np.bool_)
-    for f in range(n):
-        if horiz[f] and abs(heights[f] - floor) < tolerance:
-            grid[np.int64(np.floor(centroids[f, 0] / cell)) - lo0, np.int64(np.floor(centroids[f, 2] / cell)) - lo1] = True
-    for f in range(n):
-        if not (candidates[f] and abs(normals[f, 1]) < sin_vertical and heights[f] > floor and heights[f] < ceiling):
-            continue
+def floor_probe_votes(normals, centroids, areas, mine, grid, lo, probes, cell):  # pragma: no cover - compiled
+    """``meshplan.orient.facing._wall_votes``' probes: for each face of ``mine`` (indices), its
+    area times the floor found in front of its foot less the floor behind it, at each distance
+    of ``probes`` (m) along its horizontal normal, on the floor ``grid`` of ``cell`` (m) whose
+    cell ``(0, 0)`` is ``lo`` (in cells of x and z); numpy's operations in numpy's order."""
+    out = np.empty(mine.shape[0], np.float64)
+    for j in range(mine.shape[0]):
+        f = mine[j]
         u0 = normals[f, 0]
         u1 = normals[f, 2]
         norm = max(np.sqrt(u0 * u0 + u1 * u1), 1e-12)
@@ -765,8 +743,9 @@ def wall_floor_votes(  # pragma: no cover - compiled
         z = centroids[f, 2]
         v = 0.0
         for d in probes:
-            v += _probe_floor(grid, lo0, lo1, x + d * u0, z + d * u1, cell) - _probe_floor(grid, lo0, lo1, x - d * u0, z - d * u1, cell)
-        out[f] = areas[f] * v
+            v += _probe_floor(grid, lo[0], lo[1], x + d * u0, z + d * u1, cell) - _probe_floor(grid, lo[0], lo[1], x - d * u0, z - d * u1, cell)
+        out[j] = areas[f] * v
+    return out
 
 
 # ---------------------------------------------------------------------------------------------
@@ -820,3 +799,32 @@ def stable_argsort_f64(x):  # pragma: no cover - compiled
         order, tmp = tmp, order
         key, key2 = key2, key
     return order
+
+
+# ---------------------------------------------------------------------------------------------
+# Rooms (meshplan.plan.rooms)
+
+
+@njit(cache=True, nogil=True)
+def footprint_vertices(tri, faces, vertices, select, big_edge, x0, z0, cell, grid):  # pragma: no cover - compiled
+    """``meshplan.plan.rooms.footprint_raster``'s small faces in one pass: each face of
+    ``select`` (indices) whose longest edge is at most ``big_edge`` marks the cells of ``grid``
+    (rows z from ``z0``, columns x from ``x0``, ``cell`` m) under its corners (``faces`` into
+    ``vertices``; cells off the grid ignored). Returns the selected faces with a longer edge,
+    in order, to be sampled over their surface."""
+    big = np.empty(select.shape[0], np.int64)
+    nbig = 0
+    rows, cols = grid.shape
+    for j in range(select.shape[0]):
+        f = select[j]
+        if _edge3(tri[f]) > big_edge:
+            big[nbig] = f
+            nbig += 1
+            continue
+        for a in range(3):
+            v = faces[f, a]
+            c = np.int64(np.floor((vertices[v, 0] - x0) / cell))
+            r = np.int64(np.floor((vertices[v, 2] - z0) / cell))
+            if r >= 0 and r < rows and c >= 0 and c < cols:
+                grid[r, c] = True
+    return big[:nbig].copy()

@@ -59,13 +59,12 @@ def inward_flips(
     faces (normals down). A component without any, such as a wall scanned as a patch of its
     own, is turned by its walls: a wall faces the side its story's floor is on, just in front of
     its foot (:data:`_FLOOR_PROBES_M`). Only when neither says anything does it follow the
-    majority of the mesh. The votes are compiled passes over the faces
-    (:mod:`meshplan._kernels`): at 3M faces the numpy masks, gathers and probes of every story
-    took 0.5-0.8 s.
+    majority of the mesh.
     """
-    from .._kernels import slab_votes
+    from .._kernels import slab_votes  # numba: loaded when first needed
 
     areas = mesh.face_areas
+    # the floor and ceiling faces' votes in one compiled pass (the masks of every story: 0.2 s at 3M faces)
     floors = np.array([s.floor for s in stories], dtype=np.float64)
     ceilings = np.array([s.ceiling if s.ceiling_found else np.nan for s in stories], dtype=np.float64)
     cos_horizontal = float(np.cos(np.radians(FACING_HORIZONTAL_DEG)))
@@ -99,17 +98,22 @@ def _wall_votes(
     candidates: np.ndarray,
 ) -> FloatArray:
     """``(F,)`` votes of the near-vertical faces in ``candidates``: positive when their normal
-    points to the side where their story's floor is (each story's floor faces mark a grid of
-    :data:`_FLOOR_CELL_M`, probed at :data:`_FLOOR_PROBES_M` in front of and behind each wall's
-    foot: :func:`meshplan._kernels.wall_floor_votes`)."""
-    from .._kernels import wall_floor_votes
+    points to the side where their story's floor is."""
+    from .._kernels import floor_probe_votes  # numba: loaded when first needed
 
     out = np.zeros(len(normals))
-    normals, centroids = np.ascontiguousarray(normals), np.ascontiguousarray(centroids)
-    heights, candidates = np.ascontiguousarray(heights), np.ascontiguousarray(candidates)
-    sin_vertical = float(np.sin(np.radians(FACING_VERTICAL_DEG)))
-    probes = np.array(_FLOOR_PROBES_M, dtype=np.float64)
-    tol = float(tolerance_m)
+    vertical = candidates & (np.abs(normals[:, 1]) < np.sin(np.radians(FACING_VERTICAL_DEG)))
     for s in stories:
-        wall_floor_votes(normals, centroids, heights, areas, horiz, candidates, s.floor, s.ceiling, tol, sin_vertical, probes, _FLOOR_CELL_M, out)
+        floor = horiz & (np.abs(heights - s.floor) < tolerance_m)
+        mine = np.flatnonzero(vertical & (heights > s.floor) & (heights < s.ceiling))
+        if not floor.any() or not len(mine):
+            continue
+        cells = np.floor(centroids[floor][:, [0, 2]] / _FLOOR_CELL_M).astype(np.int64)
+        lo = cells.min(axis=0)
+        grid = np.zeros(tuple(cells.max(axis=0) - lo + 1), dtype=bool)
+        grid[cells[:, 0] - lo[0], cells[:, 1] - lo[1]] = True
+
+        # the probes in one compiled pass over the story's walls (numpy's gathers, float grids
+        # and fancy indexing: 0.5 s at 3M faces)
+        out[mine] = floor_probe_votes(normals, centroids, areas, mine, grid, lo, np.array(_FLOOR_PROBES_M), _FLOOR_CELL_M)
     return out
