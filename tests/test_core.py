@@ -306,3 +306,22 @@ def test_radix_argsort_is_numpys_stable_order(n):
     near = 1.0 + rng.integers(0, 50, n) * 2.0**-40  # only the low bits differ
     for x in (spread, ties, near):
         assert np.array_equal(stable_argsort_f64(x), np.argsort(x, kind="stable"))
+
+
+def test_compiled_span_bins_and_third_points_are_numpys():
+    """Gravity's compiled helpers give numpy's numbers to the bit: the corners' lowest and
+    highest height bins (ties of round half to even, -0.0, equal heights) and the one-point
+    samples of the faces."""
+    from meshplan._kernels import span_bins, third_points
+
+    rng = np.random.default_rng(3)
+    h = np.r_[rng.normal(size=500), np.arange(-10, 10) * 0.025, 0.0, -0.0]  # exact half-bins of 0.05
+    faces = rng.integers(0, len(h), size=(2000, 3))
+    sel = np.flatnonzero(rng.random(2000) < 0.7)
+    lo, hi = span_bins(h, faces, sel, 0.05)
+    c = h[faces[sel]]
+    assert np.array_equal(lo, np.round(np.minimum(np.minimum(c[:, 0], c[:, 1]), c[:, 2]) / 0.05))
+    assert np.array_equal(hi, np.round(np.maximum(np.maximum(c[:, 0], c[:, 1]), c[:, 2]) / 0.05))
+    tri = rng.normal(size=(3000, 3, 3)) * 10.0 ** rng.integers(-3, 3, (3000, 1, 1))
+    third = 1.0 / 3.0
+    assert np.array_equal(third_points(tri), tri[:, 0] + third * (tri[:, 1] - tri[:, 0]) + third * (tri[:, 2] - tri[:, 0]))

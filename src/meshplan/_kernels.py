@@ -828,3 +828,44 @@ def footprint_vertices(tri, faces, vertices, select, big_edge, x0, z0, cell, gri
             if r >= 0 and r < rows and c >= 0 and c < cols:
                 grid[r, c] = True
     return big[:nbig].copy()
+
+
+# ---------------------------------------------------------------------------------------------
+# Gravity's candidate tests (meshplan.orient.gravity)
+
+
+@njit(cache=True, nogil=True)
+def third_points(tri):  # pragma: no cover - compiled
+    """``(F, 3)``: ``t0 + (t1 - t0) / 3 + (t2 - t0) / 3`` of every face ``tri`` (F, 3, 3),
+    written as numpy evaluates ``tri[:, 0] + third * (tri[:, 1] - tri[:, 0]) + third * (tri[:, 2]
+    - tri[:, 0])`` (``third = 1 / 3``), to the bit, in one pass without temporaries."""
+    n = tri.shape[0]
+    out = np.empty((n, 3), np.float64)
+    third = 1.0 / 3.0
+    for f in range(n):
+        for k in range(3):
+            out[f, k] = (tri[f, 0, k] + third * (tri[f, 1, k] - tri[f, 0, k])) + third * (tri[f, 2, k] - tri[f, 0, k])
+    return out
+
+
+@njit(cache=True, nogil=True)
+def span_bins(vertex_h, faces, select, bin_m):  # pragma: no cover - compiled
+    """For each face of ``select`` (indices into ``faces``), the lowest and highest of its
+    corners' heights ``vertex_h`` in bins of ``bin_m``: numpy's ``np.round(np.minimum(...) /
+    bin_m)`` (round half to even; ``np.minimum``'s choice between equal or NaN values), to the
+    bit, without gathering the corners."""
+    n = select.shape[0]
+    lo = np.empty(n, np.float64)
+    hi = np.empty(n, np.float64)
+    for j in range(n):
+        f = select[j]
+        a = vertex_h[faces[f, 0]]
+        b = vertex_h[faces[f, 1]]
+        c = vertex_h[faces[f, 2]]
+        mn = a if (a < b or a != a) else b
+        mn = mn if (mn < c or mn != mn) else c
+        mx = a if (a > b or a != a) else b
+        mx = mx if (mx > c or mx != mx) else c
+        lo[j] = np.rint(mn / bin_m)
+        hi[j] = np.rint(mx / bin_m)
+    return lo, hi
