@@ -222,13 +222,16 @@ class FloorRaster:
         from scipy.ndimage import binary_fill_holes
 
         g = binary_fill_holes(self.grid)
-        boxes = []
-        for r in np.flatnonzero(g.any(axis=1)):
-            d = np.diff(np.r_[False, g[r], False].astype(np.int8))
-            for a, b in zip(np.flatnonzero(d == 1), np.flatnonzero(d == -1)):
-                boxes.append(shapely.box(self.x0 + a * self.cell, self.z0 + r * self.cell, self.x0 + b * self.cell, self.z0 + (r + 1) * self.cell))
-        if not boxes:
+        # every row's runs of set cells as boxes, row by row and left to right (the order of a
+        # loop over the rows; found for all rows at once)
+        pad = np.zeros((g.shape[0], g.shape[1] + 2), dtype=np.int8)
+        pad[:, 1:-1] = g
+        d = np.diff(pad, axis=1)
+        rows, a = np.nonzero(d == 1)
+        b = np.nonzero(d == -1)[1]
+        if not len(rows):
             return None
+        boxes = shapely.box(self.x0 + a * self.cell, self.z0 + rows * self.cell, self.x0 + b * self.cell, self.z0 + (rows + 1) * self.cell)
         return shapely.union_all(boxes).buffer(margin, join_style="mitre").simplify(self.cell)
 
 
