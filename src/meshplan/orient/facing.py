@@ -69,8 +69,8 @@ def inward_flips(
     ceilings = np.array([s.ceiling if s.ceiling_found else np.nan for s in stories], dtype=np.float64)
     cos_horizontal = float(np.cos(np.radians(FACING_HORIZONTAL_DEG)))
     vote, horiz = slab_votes(np.ascontiguousarray(normals[:, 1]), np.ascontiguousarray(heights), areas, floors, ceilings, float(tolerance_m), cos_horizontal)
-    comp = face_components(mesh.faces, mesh.n_vertices)
-    per = np.bincount(comp, weights=vote, minlength=int(comp.max()) + 1 if len(comp) else 0)
+    comp = mesh.face_roots  # each piece by its lowest vertex (shared with the walls' box test)
+    per = np.bincount(comp, weights=vote, minlength=mesh.n_vertices)
     undecided = per == 0
     if undecided.any():
         walls = _wall_votes(normals, centroids, heights, areas, stories, horiz, tolerance_m, undecided[comp])
