@@ -578,10 +578,14 @@ def clean_faces(vertices, inverse, faces, min_area, hashed):  # pragma: no cover
     mask = np.uint64(size - 1)
     degenerate = 0
     repeated = 0
+    nv = inverse.shape[0]
     for f in range(n):
-        a = inverse[faces[f, 0]]
-        b = inverse[faces[f, 1]]
-        c = inverse[faces[f, 2]]
+        i0, i1, i2 = faces[f, 0], faces[f, 1], faces[f, 2]
+        if i0 < 0 or i0 >= nv or i1 < 0 or i1 >= nv or i2 < 0 or i2 >= nv:
+            raise IndexError("face index out of range")  # (numpy would have said so; numba reads anything)
+        a = inverse[i0]
+        b = inverse[i1]
+        c = inverse[i2]
         out[f, 0] = a
         out[f, 1] = b
         out[f, 2] = c
