@@ -36,12 +36,14 @@ BESIDE_MIN_FACES = 1_000_000
 
 
 def _beside(mesh: Mesh) -> threading.Thread:
-    """A started thread computing ``mesh.face_roots`` and ``mesh.face_centroids`` (cached on the
-    mesh: the same arrays as computed in turn, whichever thread asks first)."""
+    """A started thread computing ``mesh.face_roots`` and ``mesh.face_centroids`` and caching
+    them on the mesh (the same arrays as the properties compute; not through them: a cached
+    property holds one lock for every mesh, and the sample's centroids would wait for it)."""
 
     def work() -> None:
-        mesh.face_roots  # noqa: B018 (cached on the mesh)
-        mesh.face_centroids  # noqa: B018
+        for name in ("face_roots", "face_centroids"):
+            value = getattr(Mesh, name).func(mesh)
+            mesh.__dict__.setdefault(name, value)
 
     t = threading.Thread(target=work, name="meshplan-orient-beside", daemon=True)
     t.start()
