@@ -139,7 +139,8 @@ def test_clean_mesh_matches_sorting(hub):
     assert (counts["dropped_degenerate"], counts["dropped_duplicate"]) == (degenerate, repeated)
     assert repeated >= 500 and degenerate > 0
     uniq_all, inverse = _merge_vertices(v)
-    assert clean_faces(uniq_all, inverse, f, MIN_FACE_AREA_M2, False)[-1] == (hub <= CLEAN_MAX_CHAIN)
+    buffers = np.empty((len(f), 3), np.int64), np.empty((len(f), 3, 3)), np.empty((len(f), 3))
+    assert clean_faces(uniq_all, inverse, f, MIN_FACE_AREA_M2, False, *buffers)[-1] == (hub <= CLEAN_MAX_CHAIN)
     assert np.array_equal(mesh.vertices, uniq) and np.array_equal(mesh.faces, faces)
     t = uniq[faces]
     assert np.array_equal(mesh.triangles, t)

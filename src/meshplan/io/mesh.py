@@ -733,9 +733,12 @@ def clean_mesh(vertices: np.ndarray, faces: np.ndarray) -> tuple[Mesh, dict[str,
         faces = np.ascontiguousarray(faces[ok])
         vertices = np.where(finite_v[:, None], vertices, 0.0)
     uniq, inverse = _merge_vertices(vertices)
-    cleaned = clean_faces(uniq, inverse, faces, MIN_FACE_AREA_M2, False)
+    # the outputs allocated by numpy (huge pages for large arrays: see clean_faces)
+    n = len(faces)
+    buffers = np.empty((n, 3), np.int64), np.empty((n, 3, 3)), np.empty((n, 3))
+    cleaned = clean_faces(uniq, inverse, faces, MIN_FACE_AREA_M2, False, *buffers)
     if not cleaned[-1]:  # a vertex with very many faces: repeats by a hash table instead
-        cleaned = clean_faces(uniq, inverse, faces, MIN_FACE_AREA_M2, True)
+        cleaned = clean_faces(uniq, inverse, faces, MIN_FACE_AREA_M2, True, *buffers)
     faces, tri, cross, keep, used, degenerate, repeated, _ = cleaned
     counts["dropped_degenerate"] = int(degenerate)
     counts["dropped_duplicate"] = int(repeated)

@@ -68,7 +68,8 @@ def inward_flips(
     floors = np.array([s.floor for s in stories], dtype=np.float64)
     ceilings = np.array([s.ceiling if s.ceiling_found else np.nan for s in stories], dtype=np.float64)
     cos_horizontal = float(np.cos(np.radians(FACING_HORIZONTAL_DEG)))
-    vote, horiz = slab_votes(np.ascontiguousarray(normals[:, 1]), np.ascontiguousarray(heights), areas, floors, ceilings, float(tolerance_m), cos_horizontal)
+    vote, horiz = np.empty(mesh.n_faces), np.empty(mesh.n_faces, dtype=bool)
+    slab_votes(np.ascontiguousarray(normals[:, 1]), np.ascontiguousarray(heights), areas, floors, ceilings, float(tolerance_m), cos_horizontal, vote, horiz)
     comp = mesh.face_roots  # each piece by its lowest vertex (shared with the walls' box test)
     per = np.bincount(comp, weights=vote, minlength=mesh.n_vertices)
     undecided = per == 0
