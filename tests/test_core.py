@@ -289,3 +289,39 @@ def test_compiled_face_sampling_gives_the_numpy_reference_points(longest_m):
     # orders): sorted by their coordinates rounded to a nanometre
     order = lambda p: p[np.lexsort(np.round(p, 9).T[::-1])]  # noqa: E731
     np.testing.assert_allclose(order(got), order(want), rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("n", [0, 1, 7, 3000, 200_000])
+def test_radix_argsort_is_numpys_stable_order(n):
+    """The compiled radix sort gives ``np.argsort(kind="stable")`` exactly: ties in input order,
+    -0.0 as 0.0, infinities in place, NaN of either sign last; on spread values, on many ties
+    and on values sharing their upper bits (passes skipped)."""
+    from meshplan._kernels import stable_argsort_f64
+
+    rng = np.random.default_rng(n)
+    special = np.array([0.0, -0.0, np.inf, -np.inf, np.nan, -np.nan, 5e-324, -5e-324, 1.0, -1.0])
+    spread = rng.normal(size=n) * 10.0 ** rng.integers(-5, 5, n)
+    ties = np.round(rng.normal(size=n))
+    ties[rng.integers(0, n, n // 5) if n else []] = rng.choice(special, n // 5)
+    near = 1.0 + rng.integers(0, 50, n) * 2.0**-40  # only the low bits differ
+    for x in (spread, ties, near):
+        assert np.array_equal(stable_argsort_f64(x), np.argsort(x, kind="stable"))
+
+
+def test_compiled_span_bins_and_third_points_are_numpys():
+    """Gravity's compiled helpers give numpy's numbers to the bit: the corners' lowest and
+    highest height bins (ties of round half to even, -0.0, equal heights) and the one-point
+    samples of the faces."""
+    from meshplan._kernels import span_bins, third_points
+
+    rng = np.random.default_rng(3)
+    h = np.r_[rng.normal(size=500), np.arange(-10, 10) * 0.025, 0.0, -0.0]  # exact half-bins of 0.05
+    faces = rng.integers(0, len(h), size=(2000, 3))
+    sel = np.flatnonzero(rng.random(2000) < 0.7)
+    lo, hi = span_bins(h, faces, sel, 0.05)
+    c = h[faces[sel]]
+    assert np.array_equal(lo, np.round(np.minimum(np.minimum(c[:, 0], c[:, 1]), c[:, 2]) / 0.05))
+    assert np.array_equal(hi, np.round(np.maximum(np.maximum(c[:, 0], c[:, 1]), c[:, 2]) / 0.05))
+    tri = rng.normal(size=(3000, 3, 3)) * 10.0 ** rng.integers(-3, 3, (3000, 1, 1))
+    third = 1.0 / 3.0
+    assert np.array_equal(third_points(tri), tri[:, 0] + third * (tri[:, 1] - tri[:, 0]) + third * (tri[:, 2] - tri[:, 0]))

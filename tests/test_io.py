@@ -92,6 +92,61 @@ def test_bad_faces_are_dropped_and_counted(tmp_path):
     assert st.faces_read == 6
 
 
+def _clean_by_sorting(vertices, faces):
+    """clean_mesh's rules written with numpy sorts (the implementation before its compiled
+    pass): unique vertices in the order of their bit patterns, degenerate faces (a repeated
+    vertex, no area) and repeats (same vertices, any order; the first kept) dropped."""
+    from meshplan.io.mesh import MIN_FACE_AREA_M2
+
+    v = vertices + 0.0
+    bits = v.view(np.int64)
+    order = np.lexsort((bits[:, 2], bits[:, 1], bits[:, 0]))
+    new = np.r_[True, np.any(bits[order][1:] != bits[order][:-1], axis=1)]
+    inverse = np.empty(len(v), np.int64)
+    inverse[order] = np.cumsum(new) - 1
+    uniq, f = v[order[new]], inverse[faces]
+    tri = uniq[f]
+    cross = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    ok = (f[:, 0] != f[:, 1]) & (f[:, 1] != f[:, 2]) & (f[:, 0] != f[:, 2]) & (0.5 * np.linalg.norm(cross, axis=1) > MIN_FACE_AREA_M2)
+    f = f[ok]
+    _, first = np.unique(np.sort(f, axis=1), axis=0, return_index=True)
+    f = f[np.sort(first)]
+    used, remap = np.unique(f, return_inverse=True)
+    return uniq[used], remap.reshape(-1, 3), (int((~ok).sum()), int(ok.sum() - len(f)))
+
+
+@pytest.mark.parametrize("hub", [0, 3000])
+def test_clean_mesh_matches_sorting(hub):
+    """The compiled clean-up (merge, renumber, degenerate and repeated faces) gives what sorting
+    gives, to the bit, on a soup with coincident vertices (-0.0 among them), ties in x, repeats
+    in other windings and unused vertices; with a fan of ``hub`` faces on one vertex, more than
+    the chains allow (``CLEAN_MAX_CHAIN``), it finishes by its hash table with the same result."""
+    from meshplan._kernels import CLEAN_MAX_CHAIN, clean_faces
+    from meshplan.io.mesh import MIN_FACE_AREA_M2, _merge_vertices, clean_mesh
+
+    rng = np.random.default_rng(7)
+    v = np.round(rng.normal(size=(4000, 3)), 1)  # many coincident vertices, many ties
+    v[:50, 0] = -0.0
+    f = rng.integers(0, len(v) - 100, size=(12000, 3))  # the last vertices unused
+    f[6000:6500] = f[:500][:, ::-1]  # repeats in the other winding
+    f[7000:7100] = np.roll(f[100:200], 1, axis=1)  # repeats, turned
+    if hub:  # vertex 0 first in the merged order: the lowest vertex of every face of the fan
+        v[0] = [-1e-300, 0.0, 0.0]  # as a signed integer, the lowest bit pattern
+        fan = rng.integers(1, len(v) - 100, size=(hub, 2))
+        f = np.r_[f, np.c_[np.zeros(hub, np.int64), fan], np.c_[fan[:10, ::-1], np.zeros(10, np.int64)]]
+    mesh, counts = clean_mesh(v, f)
+    uniq, faces, (degenerate, repeated) = _clean_by_sorting(v, f)
+    assert (counts["dropped_degenerate"], counts["dropped_duplicate"]) == (degenerate, repeated)
+    assert repeated >= 500 and degenerate > 0
+    uniq_all, inverse = _merge_vertices(v)
+    buffers = np.empty((len(f), 3), np.int64), np.empty((len(f), 3, 3)), np.empty((len(f), 3))
+    assert clean_faces(uniq_all, inverse, f, MIN_FACE_AREA_M2, False, *buffers)[-1] == (hub <= CLEAN_MAX_CHAIN)
+    assert np.array_equal(mesh.vertices, uniq) and np.array_equal(mesh.faces, faces)
+    t = uniq[faces]
+    assert np.array_equal(mesh.triangles, t)
+    assert np.allclose(mesh.face_areas, 0.5 * np.linalg.norm(np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]), axis=1), rtol=1e-12, atol=0)
+
+
 @pytest.mark.parametrize(
     "name, content, message",
     [

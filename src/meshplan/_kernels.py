@@ -460,3 +460,420 @@ def plan_rasters(tri, centroid, level, on_floor, ceiling, capped, cell):  # prag
             if on_floor[f]:
                 floor_cells[c] = 1.0
     return x0, z0, top.reshape(ni, nk), shelf.reshape(ni, nk), floor_cells.reshape(ni, nk)
+
+
+# ---------------------------------------------------------------------------------------------
+# Reading a scan: coincident vertices merged, unusable and repeated faces dropped, in few passes
+# (meshplan.io.mesh.clean_mesh).
+
+
+@njit(cache=True, nogil=True)
+def _sort_by(keys, order, s, e, col):  # pragma: no cover - compiled
+    """Sort ``order[s:e]`` by ``keys[:, col]`` (an insertion sort for a short run)."""
+    m = e - s
+    if m <= 16:
+        for i in range(s + 1, e):
+            x = order[i]
+            v = keys[x, col]
+            j = i - 1
+            while j >= s and keys[order[j], col] > v:
+                order[j + 1] = order[j]
+                j -= 1
+            order[j + 1] = x
+        return
+    vals = np.empty(m, np.int64)
+    for i in range(m):
+        vals[i] = keys[order[s + i], col]
+    o = np.argsort(vals)
+    run = order[s:e].copy()
+    for i in range(m):
+        order[s + i] = run[o[i]]
+
+
+@njit(cache=True, nogil=True)
+def lexsort_rows(keys, order):  # pragma: no cover - compiled
+    """``order`` (indices sorting ``keys[:, 0]``, an (N, C) int64 array) made to sort the rows
+    lexicographically, in place: column by column, each run of rows equal in the columns so far
+    sorted by the next. The order of equal rows is left as it comes (callers merge them).
+    (No recursion: numba's cache does not keep recursive kernels reliably.)"""
+    n = order.shape[0]
+    for col in range(1, keys.shape[1]):
+        i = 0
+        while i < n:
+            j = i + 1
+            while j < n:
+                same = True
+                for c in range(col):
+                    if keys[order[j], c] != keys[order[i], c]:
+                        same = False
+                        break
+                if not same:
+                    break
+                j += 1
+            if j - i > 1:
+                _sort_by(keys, order, i, j, col)
+            i = j
+    return order
+
+
+@njit(cache=True, nogil=True)
+def unique_sorted_rows(keys, order):  # pragma: no cover - compiled
+    """The first of each run of equal rows of ``keys`` in ``order`` (lexicographically sorted
+    indices) and the rank of the run of every row: ``keys[first]`` are the unique rows in order,
+    ``inverse`` maps each row to its own."""
+    n = order.shape[0]
+    inverse = np.empty(n, np.int64)
+    first = np.empty(n, np.int64)
+    u = -1
+    for i in range(n):
+        r = order[i]
+        new = i == 0
+        if not new:
+            p = order[i - 1]
+            for c in range(keys.shape[1]):
+                if keys[r, c] != keys[p, c]:
+                    new = True
+                    break
+        if new:
+            u += 1
+            first[u] = r
+        inverse[r] = u
+    return first[: u + 1].copy(), inverse
+
+
+#: Most kept faces on one lowest vertex that :func:`clean_faces` compares a face with before it
+#: gives up its chains for a hash table: a scanned surface puts 2-3 faces on a vertex, a fan
+#: (a disc, a cone) a few hundred; a hub of 100k faces would make the chains quadratic.
+CLEAN_MAX_CHAIN = 1024
+
+
+@njit(cache=True, nogil=True)
+def clean_faces(vertices, inverse, faces, min_area, hashed, out, tri, cross):  # pragma: no cover - compiled
+    """The faces of ``faces`` renumbered by ``inverse`` (onto the merged ``vertices``), their
+    corners and cross products ``(t1 - t0) x (t2 - t0)`` (numpy's operations in numpy's order),
+    and which to keep: not degenerate (a repeated vertex, or an area not above ``min_area``) and
+    not a repeat of an earlier kept face (the same three vertices in any order). Also returns
+    which vertices the kept faces use, the counts of degenerate and repeated faces, and whether
+    it finished (see below).
+
+    Repeats are found without sorting the faces. Unless ``hashed``, each kept face is chained to
+    its lowest vertex (``head``, ``chain``), and a face is compared with the kept faces on its
+    lowest vertex only (two or three on a scanned surface; a vertex's faces lie close in a scan's
+    face order, so the chains stay in the cache, where a hash table of the faces misses it at
+    every face: 0.1 s against 0.35 s at 3M faces). A chain longer than :data:`CLEAN_MAX_CHAIN`
+    stops the pass (``finished`` False): the caller runs it again ``hashed``, with a hash table
+    of the sorted vertex triples, linear in the faces whatever their fans.
+
+    The renumbered faces, corners and cross products are written into ``out`` (F, 3),
+    ``tri`` (F, 3, 3) and ``cross`` (F, 3), allocated by the caller with numpy: numpy asks the
+    kernel for huge pages on large arrays, numba does not, and 400 MB of small pages freed
+    among huge ones made the later stages' large allocations stall (slicing a 3M-face scan:
+    1.2 -> 2.1 s of CPU)."""
+    n = faces.shape[0]
+    keep = np.zeros(n, np.bool_)
+    used = np.zeros(vertices.shape[0], np.bool_)
+    head = np.full(0 if hashed else vertices.shape[0], -1, np.int64)
+    chain = np.empty(0 if hashed else n, np.int64)
+    size = 1
+    while hashed and size < 2 * n:
+        size *= 2
+    table = np.full(size if hashed else 0, -1, np.int64)
+    mask = np.uint64(size - 1)
+    degenerate = 0
+    repeated = 0
+    nv = inverse.shape[0]
+    for f in range(n):
+        i0, i1, i2 = faces[f, 0], faces[f, 1], faces[f, 2]
+        if i0 < 0 or i0 >= nv or i1 < 0 or i1 >= nv or i2 < 0 or i2 >= nv:
+            raise IndexError("face index out of range")  # (numpy would have said so; numba reads anything)
+        a = inverse[i0]
+        b = inverse[i1]
+        c = inverse[i2]
+        out[f, 0] = a
+        out[f, 1] = b
+        out[f, 2] = c
+        for k in range(3):
+            tri[f, 0, k] = vertices[a, k]
+            tri[f, 1, k] = vertices[b, k]
+            tri[f, 2, k] = vertices[c, k]
+        a0 = tri[f, 1, 0] - tri[f, 0, 0]
+        a1 = tri[f, 1, 1] - tri[f, 0, 1]
+        a2 = tri[f, 1, 2] - tri[f, 0, 2]
+        b0 = tri[f, 2, 0] - tri[f, 0, 0]
+        b1 = tri[f, 2, 1] - tri[f, 0, 1]
+        b2 = tri[f, 2, 2] - tri[f, 0, 2]
+        x = a1 * b2 - a2 * b1
+        y = a2 * b0 - a0 * b2
+        z = a0 * b1 - a1 * b0
+        cross[f, 0] = x
+        cross[f, 1] = y
+        cross[f, 2] = z
+        area = 0.5 * np.sqrt(x * x + y * y + z * z)
+        if a == b or b == c or a == c or not (area > min_area):
+            degenerate += 1
+            continue
+        lo, mid, hi = a, b, c  # the sorted triple
+        if lo > mid:
+            lo, mid = mid, lo
+        if mid > hi:
+            mid, hi = hi, mid
+        if lo > mid:
+            lo, mid = mid, lo
+        seen = False
+        if hashed:
+            h = np.uint64(lo) * np.uint64(0x9E3779B97F4A7C15)  # multiplicative hashing (odd constants)
+            h ^= np.uint64(mid) * np.uint64(0xC2B2AE3D27D4EB4F)
+            h ^= np.uint64(hi) * np.uint64(0x165667B19E3779F9)
+            slot = np.int64((h ^ (h >> np.uint64(29))) & mask)
+            while table[slot] >= 0:
+                g = table[slot]
+                p, q, r = out[g, 0], out[g, 1], out[g, 2]
+                if (p == lo or q == lo or r == lo) and (p == mid or q == mid or r == mid) and (p == hi or q == hi or r == hi):
+                    seen = True
+                    break
+                slot = np.int64((np.uint64(slot) + np.uint64(1)) & mask)
+            if not seen:
+                table[slot] = f
+        else:
+            g = head[lo]
+            steps = 0
+            while g >= 0:
+                p, q, r = out[g, 0], out[g, 1], out[g, 2]
+                if (p == mid or q == mid or r == mid) and (p == hi or q == hi or r == hi):
+                    seen = True  # it holds lo too: the chain is lo's
+                    break
+                g = chain[g]
+                steps += 1
+                if steps > CLEAN_MAX_CHAIN:
+                    return out, tri, cross, keep, used, degenerate, repeated, False
+            if not seen:
+                chain[f] = head[lo]
+                head[lo] = f
+        if seen:
+            repeated += 1
+            continue
+        keep[f] = True
+        used[a] = True
+        used[b] = True
+        used[c] = True
+    return out, tri, cross, keep, used, degenerate, repeated, True
+
+
+# ---------------------------------------------------------------------------------------------
+# Making the normals face into the rooms (meshplan.orient.facing).
+
+
+@njit(cache=True, nogil=True)
+def component_labels(faces, n_vertices):  # pragma: no cover - compiled
+    """``(F,)`` connected piece of every face (faces sharing a vertex are connected), numbered in
+    the order of their lowest vertex, a vertex of no face counting as a piece of its own (as
+    ``scipy.sparse.csgraph.connected_components`` numbers the vertex graph's).
+
+    The union-find of :func:`face_components` keeps the lower root, so every vertex's parent is
+    at most the vertex itself: one pass in vertex order then labels every vertex by its root's
+    number (its parent's label is already final), where finding each face's root and numbering
+    the roots with numpy took three more passes."""
+    parent = np.arange(n_vertices)
+    for f in range(faces.shape[0]):
+        for e in range(2):
+            a = _root(parent, faces[f, e])
+            b = _root(parent, faces[f, e + 1])
+            if a < b:
+                parent[b] = a
+            elif b < a:
+                parent[a] = b
+    label = np.empty(n_vertices, np.int64)
+    count = 0
+    for v in range(n_vertices):
+        p = parent[v]
+        if p == v:
+            label[v] = count
+            count += 1
+        else:
+            label[v] = label[p]
+    out = np.empty(faces.shape[0], np.int64)
+    for f in range(faces.shape[0]):
+        out[f] = label[faces[f, 0]]
+    return out
+
+
+@njit(cache=True, nogil=True)
+def slab_votes(normal_y, heights, areas, floors, ceilings, tolerance, cos_horizontal, vote, horiz):  # pragma: no cover - compiled
+    """``(F,)`` winding votes of the floor and ceiling faces and ``(F,)`` which faces are
+    horizontal (``|n_y| > cos_horizontal``): a horizontal face within ``tolerance`` of a floor
+    of ``floors`` votes its area times the sign of its ``n_y``, of a ceiling (``ceilings``, NaN
+    where a story has none) minus that; story by story, floor then ceiling, as the numpy
+    masks added them. Written into ``vote`` and ``horiz``, allocated by the caller with numpy
+    (huge pages: see :func:`clean_faces`)."""
+    n = normal_y.shape[0]
+    for f in range(n):
+        ny = normal_y[f]
+        vote[f] = 0.0
+        horiz[f] = False
+        if not (abs(ny) > cos_horizontal):
+            continue
+        horiz[f] = True
+        s = np.sign(ny)
+        v = 0.0
+        for k in range(floors.shape[0]):
+            if abs(heights[f] - floors[k]) < tolerance:
+                v += areas[f] * s
+            if abs(heights[f] - ceilings[k]) < tolerance:  # NaN: no ceiling, never near
+                v -= areas[f] * s
+        vote[f] = v
+    return vote, horiz
+
+
+@njit(cache=True, nogil=True)
+def _probe_floor(grid, lo0, lo1, x, z, cell):  # pragma: no cover - compiled
+    i = np.int64(np.floor(x / cell)) - lo0
+    k = np.int64(np.floor(z / cell)) - lo1
+    if i < 0 or i >= grid.shape[0] or k < 0 or k >= grid.shape[1]:
+        return 0.0
+    return 1.0 if grid[i, k] else 0.0
+
+
+@njit(cache=True, nogil=True)
+def floor_probe_votes(normals, centroids, areas, mine, grid, lo, probes, cell):  # pragma: no cover - compiled
+    """``meshplan.orient.facing._wall_votes``' probes: for each face of ``mine`` (indices), its
+    area times the floor found in front of its foot less the floor behind it, at each distance
+    of ``probes`` (m) along its horizontal normal, on the floor ``grid`` of ``cell`` (m) whose
+    cell ``(0, 0)`` is ``lo`` (in cells of x and z); numpy's operations in numpy's order."""
+    out = np.empty(mine.shape[0], np.float64)
+    for j in range(mine.shape[0]):
+        f = mine[j]
+        u0 = normals[f, 0]
+        u1 = normals[f, 2]
+        norm = max(np.sqrt(u0 * u0 + u1 * u1), 1e-12)
+        u0 /= norm
+        u1 /= norm
+        x = centroids[f, 0]
+        z = centroids[f, 2]
+        v = 0.0
+        for d in probes:
+            v += _probe_floor(grid, lo[0], lo[1], x + d * u0, z + d * u1, cell) - _probe_floor(grid, lo[0], lo[1], x - d * u0, z - d * u1, cell)
+        out[j] = areas[f] * v
+    return out
+
+
+# ---------------------------------------------------------------------------------------------
+# Sorting
+
+
+#: Bits of :func:`stable_argsort_f64`'s radix digits: 2048 buckets stay in the cache while a
+#: pass scatters a million indices (16 bits: a third slower there, however fewer the passes).
+_RADIX_BITS = 11
+
+
+@njit(cache=True, nogil=True)
+def stable_argsort_f64(x):  # pragma: no cover - compiled
+    """``np.argsort(x, kind="stable")`` of a float64 array, by a least-significant-digit radix
+    sort (six passes of :data:`_RADIX_BITS` bits, a pass skipped where every key shares its
+    digit): linear, 2-5 times faster than numpy's timsort on the 0.1-1M unordered values of a
+    mesh's weighted medians. Numpy's order exactly: -0.0 sorts as 0.0, and NaN (of either sign)
+    after +inf, equal values (and all NaN) in the order they come."""
+    n = x.shape[0]
+    key = np.empty(n, np.uint64)
+    sign = np.uint64(1) << np.uint64(63)
+    for i in range(n):
+        v = x[i]
+        if v != v:
+            b = np.uint64(0xFFFFFFFFFFFFFFFF)  # every NaN last
+        else:
+            b = np.float64(v + 0.0).view(np.uint64)  # + 0.0: -0.0 as 0.0
+            b = ~b if b & sign else b | sign  # monotone: negatives reversed below positives
+        key[i] = b
+    order = np.arange(n)
+    tmp = np.empty(n, np.int64)
+    key2 = np.empty(n, np.uint64)
+    buckets = 1 << _RADIX_BITS
+    mask = np.uint64(buckets - 1)
+    count = np.empty(buckets + 1, np.int64)
+    for shift in range(0, 64, _RADIX_BITS):
+        s = np.uint64(shift)
+        count[:] = 0
+        for i in range(n):
+            count[np.int64((key[i] >> s) & mask) + 1] += 1
+        if count[1:].max() == n:  # every key shares this digit: the pass changes nothing
+            continue
+        for d in range(buckets):
+            count[d + 1] += count[d]
+        for j in range(n):  # the keys travel with their indices: read in order, not gathered
+            k = key[j]
+            d = np.int64((k >> s) & mask)
+            tmp[count[d]] = order[j]
+            key2[count[d]] = k
+            count[d] += 1
+        order, tmp = tmp, order
+        key, key2 = key2, key
+    return order
+
+
+# ---------------------------------------------------------------------------------------------
+# Rooms (meshplan.plan.rooms)
+
+
+@njit(cache=True, nogil=True)
+def footprint_vertices(tri, faces, vertices, select, big_edge, x0, z0, cell, grid):  # pragma: no cover - compiled
+    """``meshplan.plan.rooms.footprint_raster``'s small faces in one pass: each face of
+    ``select`` (indices) whose longest edge is at most ``big_edge`` marks the cells of ``grid``
+    (rows z from ``z0``, columns x from ``x0``, ``cell`` m) under its corners (``faces`` into
+    ``vertices``; cells off the grid ignored). Returns the selected faces with a longer edge,
+    in order, to be sampled over their surface."""
+    big = np.empty(select.shape[0], np.int64)
+    nbig = 0
+    rows, cols = grid.shape
+    for j in range(select.shape[0]):
+        f = select[j]
+        if _edge3(tri[f]) > big_edge:
+            big[nbig] = f
+            nbig += 1
+            continue
+        for a in range(3):
+            v = faces[f, a]
+            c = np.int64(np.floor((vertices[v, 0] - x0) / cell))
+            r = np.int64(np.floor((vertices[v, 2] - z0) / cell))
+            if r >= 0 and r < rows and c >= 0 and c < cols:
+                grid[r, c] = True
+    return big[:nbig].copy()
+
+
+# ---------------------------------------------------------------------------------------------
+# Gravity's candidate tests (meshplan.orient.gravity)
+
+
+@njit(cache=True, nogil=True)
+def third_points(tri):  # pragma: no cover - compiled
+    """``(F, 3)``: ``t0 + (t1 - t0) / 3 + (t2 - t0) / 3`` of every face ``tri`` (F, 3, 3),
+    written as numpy evaluates ``tri[:, 0] + third * (tri[:, 1] - tri[:, 0]) + third * (tri[:, 2]
+    - tri[:, 0])`` (``third = 1 / 3``), to the bit, in one pass without temporaries."""
+    n = tri.shape[0]
+    out = np.empty((n, 3), np.float64)
+    third = 1.0 / 3.0
+    for f in range(n):
+        for k in range(3):
+            out[f, k] = (tri[f, 0, k] + third * (tri[f, 1, k] - tri[f, 0, k])) + third * (tri[f, 2, k] - tri[f, 0, k])
+    return out
+
+
+@njit(cache=True, nogil=True)
+def span_bins(vertex_h, faces, select, bin_m):  # pragma: no cover - compiled
+    """For each face of ``select`` (indices into ``faces``), the lowest and highest of its
+    corners' heights ``vertex_h`` in bins of ``bin_m``: numpy's ``np.round(np.minimum(...) /
+    bin_m)`` (round half to even; ``np.minimum``'s choice between equal or NaN values), to the
+    bit, without gathering the corners."""
+    n = select.shape[0]
+    lo = np.empty(n, np.float64)
+    hi = np.empty(n, np.float64)
+    for j in range(n):
+        f = select[j]
+        a = vertex_h[faces[f, 0]]
+        b = vertex_h[faces[f, 1]]
+        c = vertex_h[faces[f, 2]]
+        mn = a if (a < b or a != a) else b
+        mn = mn if (mn < c or mn != mn) else c
+        mx = a if (a > b or a != a) else b
+        mx = mx if (mx > c or mx != mx) else c
+        lo[j] = np.rint(mn / bin_m)
+        hi[j] = np.rint(mx / bin_m)
+    return lo, hi

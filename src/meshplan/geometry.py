@@ -118,6 +118,17 @@ class Mesh:
         t = self.triangles
         return _frozen((t[:, 0] + t[:, 1] + t[:, 2]) / 3.0)
 
+    @cached_property
+    def face_roots(self) -> IntArray:
+        """``(F,)`` the connected piece of every face (faces sharing a vertex are connected),
+        named by the piece's lowest vertex (:func:`meshplan._kernels.face_components`). It
+        depends on the faces' vertices only, so a transformed mesh (:meth:`transformed`) takes
+        its source's: the orientation's facing test and the walls' box test share one pass
+        (0.3 s at 3M faces)."""
+        from ._kernels import face_components  # numba: loaded when first needed
+
+        return _frozen(face_components(np.ascontiguousarray(self.faces, dtype=np.int64), self.n_vertices))
+
     @property
     def area(self) -> float:
         return float(self.face_areas.sum())
@@ -162,9 +173,14 @@ class Mesh:
             faces[sel] = faces[sel][:, ::-1]
         out = Mesh._adopt(np.ascontiguousarray(transform_points(m, self.vertices), dtype=np.float64), faces)
         cached = self.__dict__
+        if "face_roots" in cached:  # the same vertices in every face (the winding aside): the same pieces
+            out.__dict__["face_roots"] = cached["face_roots"]
         if "triangles" in cached and "_cross" in cached and det != 0:
             # as (3F, 3) and (F, 3) rows: one product each (a stack of 3x3 products is slower)
-            tri = (cached["triangles"].reshape(-1, 3) @ a3.T + m[:3, 3]).reshape(-1, 3, 3)
+            corners = cached["triangles"].reshape(-1, 3)
+            tri = np.matmul(corners, a3.T, out=np.empty_like(corners))  # no temporary: 216 MB at 3M faces
+            tri += m[:3, 3]
+            tri = tri.reshape(-1, 3, 3)
             if mirror:
                 tri = tri[:, ::-1].copy()
             cross = cached["_cross"] @ (abs(det) * np.linalg.inv(a3))  # rows: (|det| A^-T c)^T

@@ -80,7 +80,9 @@ def check_not_flat(mesh: Mesh) -> None:
     total = float(areas.sum())
     if not (np.isfinite(total) and total > 0):
         return
-    tensor = np.einsum("i,ij,ik->jk", areas, normals, normals) / total
+    # one thin product (the three-operand einsum took 0.2 s at 3M faces); the sums' order only
+    # moves the last bits, and the test is a threshold
+    tensor = ((normals * areas[:, None]).T @ normals) / total
     if np.all(np.isfinite(tensor)) and np.linalg.eigvalsh(tensor)[-1] >= FLAT_SHARE:
         raise GeometryError(
             f"the scan holds no room: all its {mesh.n_faces:,} faces are parallel "

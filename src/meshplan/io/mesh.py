@@ -691,68 +691,66 @@ def float32_warning(path: Path, extent: float, scale: float) -> str | None:
 def _merge_vertices(vertices: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Unique vertices (exactly equal coordinates) and the index of each input vertex among them.
 
-    Sorts the coordinates' bit patterns with ``lexsort``: several times faster than
-    ``np.unique(axis=0)``, which sorts opaque byte strings.
+    The unique vertices come sorted by their coordinates' bit patterns (x, then y, then z, as
+    signed integers). One sort of the x patterns (numpy's vectorized quicksort) with the ties
+    then ordered by y and z, and one pass to number the runs (:mod:`meshplan._kernels`): at 3M
+    faces (1.5M vertices) 0.25 s, where ``np.lexsort`` of the three columns, the comparison of
+    neighbours and the scatter took 0.65 s (and ``np.unique(axis=0)`` several times more).
     """
+    from .._kernels import lexsort_rows, unique_sorted_rows
+
     if not len(vertices):
         return vertices, np.zeros(0, dtype=np.int64)
     v = np.ascontiguousarray(vertices + 0.0)  # + 0.0 turns -0.0 into 0.0
     bits = v.view(np.int64)
-    order = np.lexsort((bits[:, 2], bits[:, 1], bits[:, 0]))
-    b = bits[order]
-    new = np.r_[True, np.any(b[1:] != b[:-1], axis=1)]
-    rank = np.cumsum(new) - 1
-    inverse = np.empty(len(v), dtype=np.int64)
-    inverse[order] = rank
-    return v[order[new]], inverse
+    order = lexsort_rows(bits, np.argsort(bits[:, 0]))
+    first, inverse = unique_sorted_rows(bits, order)
+    return v[first], inverse
 
 
 def clean_mesh(vertices: np.ndarray, faces: np.ndarray) -> tuple[Mesh, dict[str, int]]:
-    """Drop unusable faces, merge coincident vertices and count what was dropped."""
+    """Drop unusable faces, merge coincident vertices and count what was dropped.
+
+    Dropped are faces with a non-finite corner, degenerate faces (a repeated vertex once
+    coincident vertices are merged, or an area not above :data:`MIN_FACE_AREA_M2`) and repeats
+    of an earlier face (the same three vertices in any order; the first is kept). The faces are
+    renumbered, their corners gathered, their cross products computed and both tests made in one
+    compiled pass (:func:`meshplan._kernels.clean_faces`; repeats without sorting): with the
+    merge, 0.8-1.0 s of CPU at 3M faces where a dozen numpy passes and their temporaries took
+    2.8-3.7 s. The corners
+    and cross products are those the mesh would compute, bit for bit: it keeps them.
+    """
+    from .._kernels import clean_faces
+
     counts = {}
     finite_v = np.all(np.isfinite(vertices), axis=1)
-    ok = np.all(finite_v[faces], axis=1)
-    counts["dropped_nonfinite"] = int((~ok).sum())
-    # (the copies only where something is dropped: at 3M faces each costs 0.1-1 s)
-    if counts["dropped_nonfinite"]:
-        faces = faces[ok]
-    if not finite_v.all():
+    faces = np.ascontiguousarray(faces, dtype=np.int64)
+    if finite_v.all():
+        counts["dropped_nonfinite"] = 0
+    else:
+        ok = np.all(finite_v[faces], axis=1)
+        counts["dropped_nonfinite"] = int((~ok).sum())
+        faces = np.ascontiguousarray(faces[ok])
         vertices = np.where(finite_v[:, None], vertices, 0.0)
     uniq, inverse = _merge_vertices(vertices)
-    faces = inverse[faces]
-    tri = uniq[faces]
-    a, b = tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]
-    cross = np.stack([a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1], a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2], a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]], axis=1)
-    area = 0.5 * np.sqrt(np.einsum("ij,ij->i", cross, cross))
-    repeated = (faces[:, 0] == faces[:, 1]) | (faces[:, 1] == faces[:, 2]) | (faces[:, 0] == faces[:, 2])
-    degenerate = repeated | ~(area > MIN_FACE_AREA_M2)
-    counts["dropped_degenerate"] = int(degenerate.sum())
-    if counts["dropped_degenerate"]:
-        faces, tri, cross = faces[~degenerate], tri[~degenerate], cross[~degenerate]
-    # duplicates: the same three vertices in any order; keep the first occurrence
-    keep = np.zeros(len(faces), dtype=bool)
-    if len(faces):
-        s3 = np.sort(faces, axis=1)
-        if len(uniq) < 2**21:  # one integer key per face: a fast sort
-            key = (s3[:, 0] << 42) | (s3[:, 1] << 21) | s3[:, 2]
-            order = np.argsort(key)
-            k = key[order]
-            starts = np.flatnonzero(np.r_[True, k[1:] != k[:-1]])
-        else:
-            order = np.lexsort((s3[:, 2], s3[:, 1], s3[:, 0]))
-            k = s3[order]
-            starts = np.flatnonzero(np.r_[True, np.any(k[1:] != k[:-1], axis=1)])
-        keep[np.minimum.reduceat(order, starts)] = True
-    counts["dropped_duplicate"] = int(len(faces) - keep.sum())
-    if counts["dropped_duplicate"]:
+    # the outputs allocated by numpy (huge pages for large arrays: see clean_faces)
+    n = len(faces)
+    buffers = np.empty((n, 3), np.int64), np.empty((n, 3, 3)), np.empty((n, 3))
+    cleaned = clean_faces(uniq, inverse, faces, MIN_FACE_AREA_M2, False, *buffers)
+    if not cleaned[-1]:  # a vertex with very many faces: repeats by a hash table instead
+        cleaned = clean_faces(uniq, inverse, faces, MIN_FACE_AREA_M2, True, *buffers)
+    faces, tri, cross, keep, used, degenerate, repeated, _ = cleaned
+    counts["dropped_degenerate"] = int(degenerate)
+    counts["dropped_duplicate"] = int(repeated)
+    # (the copies only where something is dropped: at 3M faces each costs 0.1-1 s)
+    if degenerate or repeated:
         faces, tri, cross = faces[keep], tri[keep], cross[keep]
-    used = np.zeros(len(uniq), dtype=bool)
-    used[faces.reshape(-1)] = True
     if used.all():  # every vertex in a face (the usual case): no renumbering
-        return Mesh(uniq, faces)._seed(triangles=tri, _cross=cross), counts
+        # fresh arrays of valid indices: taken as they are (Mesh() would copy and check them)
+        return Mesh._adopt(uniq, faces)._seed(triangles=tri, _cross=cross), counts
     remap = np.cumsum(used) - 1
     # the corners and cross products are those the mesh would compute: keep them
-    return Mesh(uniq[used], remap[faces])._seed(triangles=tri, _cross=cross), counts
+    return Mesh._adopt(np.ascontiguousarray(uniq[used]), remap[faces])._seed(triangles=tri, _cross=cross), counts
 
 
 def _declared(path: Path, file_type: str) -> tuple[tuple[float, float, float] | None, str]:

@@ -151,6 +151,8 @@ def _select_lines(a: np.ndarray, starts: np.ndarray, lengths: np.ndarray, keep: 
 def fan(counts: np.ndarray, indices: np.ndarray, first: np.ndarray) -> np.ndarray:
     """Fan-triangulate polygons: the polygon starting at ``indices[first[i]]`` with
     ``counts[i]`` corners gives ``counts[i] - 2`` triangles sharing its first corner."""
+    if len(indices) == 3 * len(counts) and np.all(counts == 3) and np.array_equal(first, np.arange(0, len(indices), 3)):
+        return indices.reshape(-1, 3)  # triangles one after the other (the usual file): the items as they are
     n_tri = counts - 2
     total = int(n_tri.sum())
     base = np.repeat(first, n_tri)

@@ -21,19 +21,15 @@ def face_components(faces: IntArray, n_vertices: int) -> IntArray:
 
     Components are numbered as ``scipy.sparse.csgraph.connected_components`` numbers those of
     the vertex graph: in the order of their lowest vertex, a vertex of no face being a component
-    of its own. They are found by the compiled union-find of :mod:`meshplan._kernels` (which
-    labels each by its lowest vertex), three times faster than building the sparse graph.
+    of its own. They are found and numbered by the compiled union-find of :mod:`meshplan._kernels`
+    (:func:`~meshplan._kernels.component_labels`), three times faster than building the sparse
+    graph.
     """
-    from .._kernels import face_components as _face_roots  # numba: loaded when first needed
+    from .._kernels import component_labels  # numba: loaded when first needed
 
     if not len(faces):
         return np.zeros(0, dtype=np.int64)
-    roots = _face_roots(np.ascontiguousarray(faces, dtype=np.int64), n_vertices)
-    # the lowest vertex of each component: every root, and every vertex of no face
-    lowest = np.ones(n_vertices, dtype=bool)
-    lowest[faces.reshape(-1)] = False
-    lowest[roots] = True
-    return (np.cumsum(lowest) - 1)[roots]
+    return component_labels(np.ascontiguousarray(faces, dtype=np.int64), n_vertices)
 
 
 def inward_flips(
@@ -69,18 +65,17 @@ def inward_flips(
     its foot (:data:`_FLOOR_PROBES_M`). Only when neither says anything does it follow the
     majority of the mesh.
     """
-    normals_y = normals[:, 1]
+    from .._kernels import slab_votes  # numba: loaded when first needed
+
     areas = mesh.face_areas
-    vote = np.zeros(mesh.n_faces)
-    horiz = np.abs(normals_y) > np.cos(np.radians(FACING_HORIZONTAL_DEG))
-    for s in stories:
-        near_floor = horiz & (np.abs(heights - s.floor) < tolerance_m)
-        vote[near_floor] += areas[near_floor] * np.sign(normals_y[near_floor])
-        if s.ceiling_found:
-            near_ceiling = horiz & (np.abs(heights - s.ceiling) < tolerance_m)
-            vote[near_ceiling] -= areas[near_ceiling] * np.sign(normals_y[near_ceiling])
-    comp = face_components(mesh.faces, mesh.n_vertices)
-    per = np.bincount(comp, weights=vote, minlength=int(comp.max()) + 1 if len(comp) else 0)
+    # the floor and ceiling faces' votes in one compiled pass (the masks of every story: 0.2 s at 3M faces)
+    floors = np.array([s.floor for s in stories], dtype=np.float64)
+    ceilings = np.array([s.ceiling if s.ceiling_found else np.nan for s in stories], dtype=np.float64)
+    cos_horizontal = float(np.cos(np.radians(FACING_HORIZONTAL_DEG)))
+    vote, horiz = np.empty(mesh.n_faces), np.empty(mesh.n_faces, dtype=bool)
+    slab_votes(np.ascontiguousarray(normals[:, 1]), np.ascontiguousarray(heights), areas, floors, ceilings, float(tolerance_m), cos_horizontal, vote, horiz)
+    comp = mesh.face_roots  # each piece by its lowest vertex (shared with the walls' box test)
+    per = np.bincount(comp, weights=vote, minlength=mesh.n_vertices)
     undecided = per == 0
     if undecided.any():
         r = np.eye(3) if rotation is None else np.asarray(rotation, dtype=np.float64)
@@ -116,7 +111,7 @@ def _wall_votes(
     its triangles (:data:`_FLOOR_CELL_M` apart), not from their centroids alone: the triangles of
     a coarse or decimated scan (up to 25 cm) would leave most cells empty, and the probes would
     find floor on either side by chance."""
-    from .._kernels import sample_faces  # numba: loaded when first needed
+    from .._kernels import floor_probe_votes, sample_faces  # numba: loaded when first needed
 
     out = np.zeros(len(normals))
     vertical = candidates & (np.abs(normals[:, 1]) < np.sin(np.radians(FACING_VERTICAL_DEG)))
@@ -134,18 +129,7 @@ def _wall_votes(
         grid = np.zeros(tuple(cells.max(axis=0) - lo + 1), dtype=bool)
         grid[cells[:, 0] - lo[0], cells[:, 1] - lo[1]] = True
 
-        def has_floor(p: FloatArray, grid: np.ndarray = grid, lo: np.ndarray = lo) -> FloatArray:
-            c = np.floor(p / _FLOOR_CELL_M).astype(np.int64) - lo
-            ok = (c[:, 0] >= 0) & (c[:, 0] < grid.shape[0]) & (c[:, 1] >= 0) & (c[:, 1] < grid.shape[1])
-            found = np.zeros(len(p))
-            found[ok] = grid[c[ok, 0], c[ok, 1]]
-            return found
-
-        u = normals[mine][:, [0, 2]]
-        u /= np.maximum(np.linalg.norm(u, axis=1), 1e-12)[:, None]
-        foot = centroids[mine][:, [0, 2]]
-        v = np.zeros(len(mine))
-        for d in _FLOOR_PROBES_M:
-            v += has_floor(foot + d * u) - has_floor(foot - d * u)
-        out[mine] = areas[mine] * v
+        # the probes in one compiled pass over the story's walls (numpy's gathers, float grids
+        # and fancy indexing: 0.5 s at 3M faces)
+        out[mine] = floor_probe_votes(normals, centroids, areas, mine, grid, lo, np.array(_FLOOR_PROBES_M), _FLOOR_CELL_M)
     return out

@@ -37,7 +37,7 @@ from typing import Literal
 
 import numpy as np
 
-from .._kernels import centroids_areas, max_corner_distance, plan_rasters, scatter_max, scatter_min, stable_group_order
+from .._kernels import centroids_areas, max_corner_distance, plan_rasters, scatter_max, scatter_min, stable_argsort_f64, stable_group_order
 from ..geometry import FloatArray, IntArray
 
 #: Cell of the plan rasters of a story (m): finer than a counter's depth (0.6 m) and a wall's
@@ -298,8 +298,8 @@ def group_weighted_median(labels: IntArray, values: FloatArray, weights: FloatAr
     ``value_order`` is ``np.argsort(values, kind="stable")`` where the caller has it (several
     groupings of the same values): the order is that of ``np.lexsort((values, labels))``, a
     stable sort by value then a stable counting sort by group."""
-    if value_order is None:
-        value_order = np.argsort(values, kind="stable")
+    if value_order is None:  # numpy's stable order, by a compiled radix sort (2-4x faster)
+        value_order = stable_argsort_f64(np.ascontiguousarray(values, dtype=np.float64))
     order = value_order[stable_group_order(np.asarray(labels, dtype=np.int64)[value_order], int(k))]
     lab, val, w = labels[order], values[order], weights[order]
     cw = np.cumsum(w)

@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._kernels import face_components
 from ..geometry import Mesh
 
 #: Triangles and distinct corners of a box modelled as a cuboid (6 rectangles, 2 triangles each).
@@ -48,7 +47,7 @@ def object_boxes(mesh: Mesh, max_wall_thickness_m: float) -> np.ndarray:
     out = np.zeros(mesh.n_faces, dtype=bool)
     if mesh.n_faces < BOX_FACES:
         return out
-    comp = face_components(np.ascontiguousarray(mesh.faces, dtype=np.int64), mesh.n_vertices)
+    comp = mesh.face_roots  # computed once per mesh (the plan mesh has the orientation's)
     counts = np.bincount(comp)  # pieces are labelled by a vertex: one bincount, no sort of all faces
     in_twelve = np.flatnonzero(counts[comp] == BOX_FACES)
     if not len(in_twelve):
