@@ -772,21 +772,27 @@ def _wall_cores(rows: list[dict], params: WallParams) -> np.ndarray:
     two surfaces (a parametric model's thin boxes, one on each side of the wall), which face
     into the wall's core. A space is wider than a wall is thick, so no room lies between them;
     the wall's outer faces bound the rooms."""
-    n = len(rows)
-    out = np.zeros(n, dtype=bool)
-    if n < 2:
-        return out
+    if len(rows) < 2:
+        return np.zeros(len(rows), dtype=bool)
+    facing_back, d = _facing_back(rows)
+    return (facing_back & (d >= CORE_MIN_M) & (d <= params.max_wall_thickness_m)).any(axis=1)
+
+
+def _facing_back(rows: list[dict]) -> tuple[np.ndarray, FloatArray]:
+    """``(n, n)`` which rows face back at each other's (parallel within
+    :data:`PILASTER_PARALLEL_DEG`, facing the other way, running alongside each other over
+    :data:`CORE_OVERLAP_SHARE` of the shorter), and how far ``d[i, j]`` row ``j``'s plane lies in
+    front of row ``i``'s (m; negative behind)."""
     nor = np.array([r["normal"] for r in rows], dtype=np.float64)
     off = np.array([r["offset"] for r in rows])
     lo, hi = np.array([r["u_min"] for r in rows]), np.array([r["u_max"] for r in rows])
-    opposite = nor @ nor.T <= -np.cos(np.radians(PILASTER_PARALLEL_DEG))  # parallel, facing back
-    # j's plane lies d in front of i's, j facing back: with n_j = -n_i, d = -off_j - off_i;
-    # j's tangent is -i's, so j runs over [-hi_j, -lo_j] along i
+    opposite = nor @ nor.T <= -np.cos(np.radians(PILASTER_PARALLEL_DEG))
+    # with n_j = -n_i, j's plane lies d = -off_j - off_i in front of i's; j's tangent is -i's,
+    # so j runs over [-hi_j, -lo_j] along i
     d = -off[None, :] - off[:, None]
     overlap = np.minimum(hi[:, None], -lo[None, :]) - np.maximum(lo[:, None], -hi[None, :])
     shorter = np.minimum((hi - lo)[:, None], (hi - lo)[None, :])
-    core = opposite & (d >= CORE_MIN_M) & (d <= params.max_wall_thickness_m) & (overlap >= CORE_OVERLAP_SHARE * shorter)
-    return core.any(axis=1)
+    return opposite & (overlap >= CORE_OVERLAP_SHARE * shorter), d
 
 
 #: The outer face of a modelled wall looks at nothing scanned along at least this share of it
@@ -805,21 +811,15 @@ def _outer_faces(rows: list[dict], raster: StoryRaster, params: WallParams) -> n
     :data:`OUTSIDE_NEAR_M` and within ``context_m``) while the other face sees the scan. It looks
     out of the building and bounds no space; the wall is its inner face. A scan never shows a
     wall's two sides in one plane."""
-    n = len(rows)
-    out = np.zeros(n, dtype=bool)
-    if n < 2:
+    out = np.zeros(len(rows), dtype=bool)
+    if len(rows) < 2:
         return out
-    nor = np.array([r["normal"] for r in rows], dtype=np.float64)
-    off = np.array([r["offset"] for r in rows])
-    lo, hi = np.array([r["u_min"] for r in rows]), np.array([r["u_max"] for r in rows])
-    opposite = nor @ nor.T <= -np.cos(np.radians(PILASTER_PARALLEL_DEG))
-    apart = np.abs(off[:, None] + off[None, :])  # j's plane in i's frame is -off_j
-    overlap = np.minimum(hi[:, None], -lo[None, :]) - np.maximum(lo[:, None], -hi[None, :])
-    shorter = np.minimum((hi - lo)[:, None], (hi - lo)[None, :])
-    twin = opposite & (apart <= CORE_MIN_M) & (overlap >= CORE_OVERLAP_SHARE * shorter)
+    facing_back, d = _facing_back(rows)
+    twin = facing_back & (np.abs(d) <= CORE_MIN_M)
     if not twin.any():
         return out
     ends = np.array([_ends(r) for r in rows])
+    nor = np.array([r["normal"] for r in rows], dtype=np.float64)
     seen = seen_in_front(raster, ends[:, 0], ends[:, 1], nor, OUTSIDE_NEAR_M, params.context_m)
     outside = seen <= 1.0 - OUTSIDE_SHARE
     return outside & np.any(twin & ~outside[None, :], axis=1)
