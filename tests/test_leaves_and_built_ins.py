@@ -178,3 +178,22 @@ def test_the_outer_face_of_a_modelled_exterior_wall_is_no_wall():
     assert not _outer_faces([outer], raster, params).any()
     top[: int(0.9 / RASTER_M), :] = 0.0  # a room on the other side too: a partition
     assert not _outer_faces([inner, outer], raster, params).any()
+
+
+def test_walls_short_of_a_scanned_ceiling():
+    """Walls scanned to 1.6 m under a ceiling at 2.7 m stop short of it; walls scanned into the
+    band under the ceiling (a headset's rounded corner at 2.6 m) do not, nor do a few patches
+    of them near it."""
+    from meshplan.walls.flat import _walls_short_of
+
+    def wall(top: float, n: int = 20) -> tuple[np.ndarray, np.ndarray]:
+        x = np.linspace(0.0, 4.0, n + 1)
+        tri = np.array([[[a, 0.0, 0.0], [b, 0.0, 0.0], [a, top, 0.0]] for a, b in zip(x[:-1], x[1:])])
+        return tri, np.tile([0.0, 0.0, 1.0], (n, 1))
+
+    low, n_low = wall(1.6)
+    assert _walls_short_of(low, n_low, 0.0, 2.7)
+    high, n_high = wall(2.6)
+    assert not _walls_short_of(high, n_high, 0.0, 2.7)
+    # one face of the high wall among the low ones (7.5 % of the area): walls reaching the band
+    assert not _walls_short_of(np.r_[low, high[:1]], np.r_[n_low, n_high[:1]], 0.0, 2.7)

@@ -775,7 +775,7 @@ def _wall_cores(rows: list[dict], params: WallParams) -> np.ndarray:
     if len(rows) < 2:
         return np.zeros(len(rows), dtype=bool)
     facing_back, d = _facing_back(rows)
-    return (facing_back & (d >= CORE_MIN_M) & (d <= params.max_wall_thickness_m)).any(axis=1)
+    return np.asarray((facing_back & (d >= CORE_MIN_M) & (d <= params.max_wall_thickness_m)).any(axis=1))
 
 
 def _facing_back(rows: list[dict]) -> tuple[np.ndarray, FloatArray]:
@@ -1015,11 +1015,18 @@ def find_flat_walls(mesh: Mesh, orientation: Orientation, params: WallParams | N
     below: list[dict] = []  # walls of the story below that reach its ceiling
     for story in orientation.stories:
         ceiling = story.ceiling if story.ceiling_found else None
+        story_faces = np.flatnonzero(face_story == story.index)
+        if ceiling is not None and _walls_short_of(tri[story_faces], normals[story_faces], story.floor, ceiling):
+            # the ceiling was scanned but no wall up to it (a user who looked up in the middle
+            # of the rooms only): the walls' tops are lost in the band under it, as in a story
+            # without a ceiling, which is what they are judged against (the ceiling and what
+            # rounds into it, the band WALLS_SHORT_M under it, left out of the rasters)
+            story_faces = story_faces[centroids[story_faces, 1] <= ceiling - WALLS_SHORT_M]
+            ceiling = None
         # without a scanned ceiling the assumed one bounds nothing: the story's faces go up to
         # its top boundary (the next story, or the top of the scan)
         story_top = story.ceiling if ceiling is not None else story.top
         in_story = (face_story == story.index) & ~objects & (centroids[:, 1] > story.floor) & (centroids[:, 1] < story_top)
-        story_faces = np.flatnonzero(face_story == story.index)
         raster = story_raster(tri[story_faces], normals[story_faces], story.floor, ceiling)
         height = params.box_height_m or story.height
         half = np.array([params.box_length_m / 2, params.box_depth_m / 2, height / 2])
@@ -1146,6 +1153,33 @@ def find_flat_walls(mesh: Mesh, orientation: Orientation, params: WallParams | N
         segment_kept=np.array(seg_kept, dtype=bool),
         segment_wall=segment_wall,
     )
+
+
+#: The walls of a story stop short of its scanned ceiling when nothing vertical was scanned
+#: within this distance (m) under it (:func:`_walls_short_of`): headsets round a wall into the
+#: ceiling over 10-20 cm, and a scan that looked at the walls reaches that band; a user who did
+#: not look up scans them to 1.4-2.0 m.
+WALLS_SHORT_M = 0.4
+
+#: Share of a story's wall area (vertical faces) that must lie below the band under its ceiling
+#: for its walls to stop short of it: a few patches of wall near the ceiling (a cupboard's top,
+#: a door's head) do not make walls scanned up to it.
+WALLS_SHORT_SHARE = 0.98
+
+
+def _walls_short_of(tri: FloatArray, normals: FloatArray, floor: float, ceiling: float) -> bool:
+    """Whether the vertical faces of a story (``tri``, ``normals``; a wall's faces, those of the
+    furniture) stop :data:`WALLS_SHORT_M` or more under its ``ceiling``, all but
+    (1 - :data:`WALLS_SHORT_SHARE`) of their area: the walls were not scanned up to it."""
+    vertical = np.abs(normals[:, 1]) < np.sin(np.radians(VERTICAL_DEG))
+    if not vertical.any():
+        return False
+    t = tri[vertical]
+    area = 0.5 * np.linalg.norm(np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]), axis=1)
+    high = t[:, :, 1].max(axis=1) > ceiling - WALLS_SHORT_M
+    above = t[:, :, 1].max(axis=1) > floor + WALLS_SHORT_M  # the walls, not the skirting
+    total = float(area[above].sum())
+    return total > 0 and float(area[high].sum()) <= (1.0 - WALLS_SHORT_SHARE) * total
 
 
 def _wall_columns(
