@@ -196,10 +196,13 @@ class Candidate:
 class WallEvidence:
     """The mesh arranged once for every wall face's search."""
 
-    def __init__(self, mesh: Mesh, walls: FlatWalls, params: PlanParams) -> None:
+    def __init__(self, mesh: Mesh, walls: FlatWalls, params: PlanParams, thickness: FloatArray | None = None) -> None:
         self.mesh = mesh
         self.walls = walls
         self.params = params
+        #: per face, the thickness (m) of its physical wall (measured between its two faces, or
+        #: the default of a wall seen from one side); ``nan`` where unknown
+        self.thickness = np.asarray(thickness, dtype=np.float64) if thickness is not None else np.full(len(walls), np.nan)
         self.tri = mesh.triangles
         self.normals = mesh.face_normals
         self.centroids = mesh.face_centroids
@@ -272,6 +275,19 @@ class WallEvidence:
                 self._vertical_normals = self.normals[v]
             self._sorted(key, w, v[np.abs(self._vertical_normals @ n3) >= self.cos])
         return self.slab_faces(np.zeros(0, np.int64), key, w, d_range, u_range)
+
+    def across(self, w: int) -> IntArray:
+        """The vertical faces facing along face ``w``'s tangent (either way, within
+        ``opening_facing_deg``): jambs, reveals and returns across its wall's depth."""
+        key = ("across", int(self.walls.direction[w]))
+        if key not in self._cache:
+            n3 = self._direction_normal(w)
+            t3 = np.array([-n3[2], 0.0, n3[0]])
+            v = self.vertical
+            if self._vertical_normals is None:
+                self._vertical_normals = self.normals[v]
+            self._cache[key] = (np.zeros(0), v[np.abs(self._vertical_normals @ t3) >= self.cos], np.zeros(0, np.int64))
+        return self._cache[key][1]
 
     def floor_faces(self, w: int, floor: float, d_range: tuple[float, float], u_range: tuple[float, float]) -> IntArray:
         """The floor faces at height ``floor`` that may reach the box ``d_range`` across and
@@ -483,7 +499,22 @@ def _gaps(ev: WallEvidence, w: int, floor: float, ceiling: float) -> list[Candid
     verts, vd = verts[in_slab], vd[in_slab]
     vu, vy = verts @ t3, verts[:, 1]
     floor_cols = _floor_beyond(ev, w, n3, t3, off, floor, lo, ncol, cell, params)
-    frame = _Frame(grid, lo, floor, ceiling, cell, margin, vu, vy, w, left_corner is not None, right_corner is not None)
+    # the wall's depth between its faces, inset from both (a leaf standing open at its hinge
+    # reaches into the wall's depth by its thickness times the cosine of its angle at most)
+    thick = float(ev.thickness[w])
+    inner = (-(thick - REVEAL_INSET_M), -REVEAL_INSET_M) if thick > 2 * REVEAL_INSET_M else None
+
+    def to_reveals(left: float, right: float) -> tuple[float, float]:
+        """The jambs ``left`` and ``right`` moved out to the reveals beyond them (:data:`REVEAL_SHARE`)."""
+        if inner is None:
+            return left, right
+        out = []
+        for u, toward in ((left, 1.0), (right, -1.0)):
+            share, at = _reveal(ev, w, u, inner, floor + params.opening_margin_m, floor + HEAD_UNSEEN_MIN_TOP_M, toward)
+            out.append(at if share >= REVEAL_SHARE and 0.0 < (u - at) * toward <= REVEAL_REACH_M else u)
+        return out[0], out[1]
+
+    frame = _Frame(grid, lo, floor, ceiling, cell, margin, vu, vy, w, left_corner is not None, right_corner is not None, to_reveals)
     found = _doors(frame, walls, floor_cols, params) + _windows(frame, walls, params)
     found += [c for c in _headless_windows(frame, walls, params) if not any(_overlap(c, o) for o in found)]
     # doors whose leaf stands closed in its frame: the same reading on the face's own plane only,
@@ -502,14 +533,26 @@ def _gaps(ev: WallEvidence, w: int, floor: float, ceiling: float) -> list[Candid
         in_face = vd >= -LEAF_SET_BACK_M
         leaf = replace(frame, grid=face_grid, vu=vu[in_face], vy=vy[in_face])
         for c in _doors(leaf, walls, floor_cols, params):
-            if any(_overlap(c, o) for o in found):
+            # a leaf scanned lower than the wall beside it leaves the band above its scanned top
+            # empty in the whole slab, between the door's jambs: a "window" without a head
+            # (:func:`_headless_windows`) that the doorway in the face's plane explains
+            over = [o for o in found if _overlap(c, o)]
+            if any(o.kind != "window" or o.how != "head unseen" or not _same_jambs(c, o, EDGE_CELLS * cell) for o in over):
                 continue
+            before = len(found)
             if c.how in ("gap", "corner"):
                 found.append(replace(c, how="leaf"))
             elif c.how == "head unseen" and _open_in_slab(grid, door_rows, lo, cell, c):
                 # a leaf standing open reaches into the slab by its hinge only, a wedge beside
                 # one jamb that the face's own plane does not hold: the doorway is open
                 found.append(c)
+            elif c.how == "head unseen" and _revealed(ev, w, c, (far, near), floor + params.opening_margin_m, floor + HEAD_UNSEEN_MIN_TOP_M):
+                # a leaf closed in its frame, or standing a little open with its faces in the
+                # slab all over the doorway (a missing strip of the face, with the far face of
+                # its wall behind, has no reveals at its edges)
+                found.append(replace(c, how="leaf"))
+            if len(found) > before and over:
+                found = [o for o in found if not any(o is x for x in over)]
     # windows whose glazing was scanned, set back in a reveal: holes in the face's own plane
     # over a surface behind it that faces the room (the wall's far face faces away)
     room = ev.normals[cand][keep] @ n3 > ev.cos
@@ -533,6 +576,69 @@ def _gaps(ev: WallEvidence, w: int, floor: float, ceiling: float) -> list[Candid
 #: by its hinge only) when at least this share of its columns is empty in the whole slab, from
 #: the floor to a door's height; a closed leaf set back in its frame fills them all.
 OPEN_IN_SLAB_SHARE = 0.5
+
+
+#: A doorway found in the face's own plane whose head the scan did not reach, with the whole slab
+#: holding something over it (a leaf closed in its frame, or standing a little open), is a door
+#: when both its jambs show a reveal: faces across the wall's depth (facing along the wall) within
+#: :data:`REVEAL_REACH_M` of each jamb, at heights covering at least this share of the rows (of
+#: ``opening_cell_m``) from the floor band up to :data:`HEAD_UNSEEN_MIN_TOP_M`. A strip of the face
+#: that the scan missed shows the far face of its wall behind it and has no reveal at its edges (0
+#: rows on the hard synthetic scans, 25-35 rows of 5 cm at a door's jambs there).
+REVEAL_SHARE = 0.5
+#: ... within this distance (m) along the wall of the jamb: the grid's quantization of the jamb
+#: (:data:`EDGE_CELLS` cells of 5 cm).
+REVEAL_REACH_M = 0.1
+#: The reveal of a jamb is read inside the wall's depth, this far (m) from both its faces: a
+#: door's leaf standing open at its hinge stands in the doorway beside the reveal, from the face
+#: its hinge is on outwards, and reaches into the wall's depth by less than its thickness (4 cm)
+#: times the cosine of its angle; its edge then lies in the face's plane, a jamb to the raster
+#: (the opening measured a leaf's thickness narrow), while the reveal behind it is the jamb.
+REVEAL_INSET_M = 0.02
+
+
+def _reveal(ev: WallEvidence, w: int, u: float, d_range: tuple[float, float], low: float, high: float, toward: float = 0.0) -> tuple[float, float]:
+    """The reveal at a jamb ``u`` along face ``w``: ``(share, position)``, the share of the rows
+    (of ``opening_cell_m``) from ``low`` to ``high`` holding a face across the wall's depth (facing
+    along the wall, in ``d_range`` across it, within :data:`REVEAL_REACH_M` of ``u``) and the
+    area-weighted median position of those faces along the wall (``nan`` without any). With
+    ``toward`` (+1 or -1) only the faces facing that way along the tangent count: those facing
+    into the opening."""
+    walls, cell = ev.walls, ev.params.opening_cell_m
+    n3 = np.array([walls.normal[w][0], 0.0, walls.normal[w][1]])
+    t3 = np.array([walls.tangent[w][0], 0.0, walls.tangent[w][1]])
+    off = float(walls.offset[w])
+    nrow = max(1, int(np.ceil((high - low) / cell)))
+    faces = ev.near(ev.across(w), n3, t3, off, d_range, (u - REVEAL_REACH_M, u + REVEAL_REACH_M), (low, high))
+    if toward:
+        faces = faces[ev.normals[faces] @ t3 * toward > 0]
+    tri = ev.tri[faces]
+    d, y = tri @ n3 - off, tri[:, :, 1]
+    cu = ev.centroids[faces] @ t3
+    ok = (_max3(d) >= d_range[0]) & (_min3(d) <= d_range[1]) & (np.abs(cu - u) <= REVEAL_REACH_M)
+    ok &= (_max3(y) >= low) & (_min3(y) <= high)
+    if not ok.any():
+        return 0.0, float("nan")
+    a = np.clip(np.floor((_min3(y[ok]) - low) / cell).astype(np.int64), 0, nrow)
+    b = np.clip(np.ceil((_max3(y[ok]) - low) / cell).astype(np.int64), 0, nrow)
+    diff = np.zeros(nrow + 1, np.int64)
+    np.add.at(diff, a, 1)
+    np.add.at(diff, b, -1)
+    share = float(np.mean(np.cumsum(diff)[:nrow] > 0))
+    order = np.argsort(cu[ok], kind="stable")
+    weight = np.cumsum(ev.mesh.face_areas[faces[ok]][order])
+    return share, float(cu[ok][order][np.searchsorted(weight, 0.5 * weight[-1])])
+
+
+def _revealed(ev: WallEvidence, w: int, c: Candidate, d_range: tuple[float, float], low: float, high: float) -> bool:
+    """Whether both jambs of door ``c`` in face ``w`` show a reveal in the slab ``d_range`` over
+    :data:`REVEAL_SHARE` of the heights from ``low`` to ``high`` (see :data:`REVEAL_SHARE`)."""
+    return all(_reveal(ev, w, u, d_range, low, high)[0] >= REVEAL_SHARE for u in (c.u_min, c.u_max))
+
+
+def _same_jambs(a: Candidate, b: Candidate, tol: float) -> bool:
+    """Whether two openings of one face have their jambs within ``tol`` (m) of each other."""
+    return abs(a.u_min - b.u_min) <= tol and abs(a.u_max - b.u_max) <= tol
 
 
 def _open_in_slab(grid: np.ndarray, rows: slice, lo: float, cell: float, c: Candidate) -> bool:
@@ -666,6 +772,8 @@ class _Frame:
     wall: int
     left_corner: bool
     right_corner: bool
+    #: moves a door's jambs out to the reveals beyond them, where the wall's depth is known
+    to_reveals: Callable[[float, float], tuple[float, float]] | None = None
 
 
 def _refine(f: _Frame, left: float, right: float, low: float, high: float) -> tuple[float, float]:
@@ -772,6 +880,8 @@ def _doors(f: _Frame, walls: FlatWalls, floor_cols: np.ndarray, params: PlanPara
         else:
             continue
         left, right = _refine(f, left, right, f.floor + params.opening_margin_m, min(top, f.floor + params.door_height_m))
+        if f.to_reveals is not None:
+            left, right = f.to_reveals(left, right)
         if not params.door_width_m[0] <= right - left <= params.door_width_m[1]:
             continue
         if (f.left_corner and lj[0] < EDGE_CELLS) or (f.right_corner and rj[0] >= ncol - EDGE_CELLS):

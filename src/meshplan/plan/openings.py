@@ -167,7 +167,10 @@ def find_openings(
     if physical is None:
         wp = WallParams()
         physical = physical_walls(walls, wp.max_wall_thickness_m, wp.default_wall_thickness_m)
-    ev = WallEvidence(mesh, walls, params)
+    thickness = np.full(len(walls), np.nan)
+    for pw in physical:
+        thickness[list(pw.faces)] = pw.thickness
+    ev = WallEvidence(mesh, walls, params, thickness)
     found: list[Candidate] = []
     for w in range(len(walls)):
         story = orientation.stories[int(walls.story[w])]
