@@ -32,7 +32,7 @@ from ..geometry import FloatArray, IntArray, Mesh
 from ..orient import Orientation
 from ..walls import FlatWalls, PhysicalWall, WallParams, physical_walls
 from ..walls.flat import segment_distances
-from .doors import Candidate, WallEvidence, wall_candidates
+from .doors import EDGE_CELLS, Candidate, WallEvidence, wall_candidates
 from .params import PlanParams
 
 #: Two finds on parallel faces are one opening when their intervals along the wall overlap by
@@ -175,6 +175,7 @@ def find_openings(
     for w in range(len(walls)):
         story = orientation.stories[int(walls.story[w])]
         found.extend(wall_candidates(ev, w, story.floor, story.ceiling))
+    found = _without_leaf_windows(found, walls, params)
     if not found:
         return _empty()
     rows = _merge(found, walls, physical, params)
@@ -260,6 +261,31 @@ def _along(walls: FlatWalls, src: int, dst: int, u: float) -> float:
     """``u`` along face ``src`` at its plane, as ``u`` along face ``dst``."""
     p = walls.offset[src] * walls.normal[src] + u * walls.tangent[src]
     return float(walls.tangent[dst] @ p)
+
+
+def _without_leaf_windows(found: list[Candidate], walls: FlatWalls, params: PlanParams) -> list[Candidate]:
+    """``found`` without the windows whose head was not scanned (:func:`meshplan.plan.doors._headless_windows`)
+    that stand between the jambs of a door found on a parallel face of the same wall: a leaf
+    closed flush with one face and scanned lower than the wall beside it leaves the band above it
+    empty there, a "window" on its sill, while the other face shows the doorway."""
+    tol = EDGE_CELLS * params.opening_cell_m
+    depth = params.opening_wall_depth_m + 2 * params.opening_slab_m
+    cos = np.cos(np.radians(PARALLEL_DEG))
+    doors = [c for c in found if c.kind == "door"]
+
+    def explained(c: Candidate) -> bool:
+        for d in doors:
+            if walls.story[d.wall] != walls.story[c.wall] or abs(float(walls.normal[d.wall] @ walls.normal[c.wall])) < cos:
+                continue
+            mid = walls.offset[c.wall] * walls.normal[c.wall] + 0.5 * (c.u_min + c.u_max) * walls.tangent[c.wall]
+            if abs(float(walls.normal[d.wall] @ mid) - walls.offset[d.wall]) > depth:
+                continue
+            lo, hi = sorted((_along(walls, c.wall, d.wall, c.u_min), _along(walls, c.wall, d.wall, c.u_max)))
+            if abs(lo - d.u_min) <= tol and abs(hi - d.u_max) <= tol:
+                return True
+        return False
+
+    return [c for c in found if not (c.kind == "window" and c.how == "head unseen" and explained(c))]
 
 
 def _merge(found: list[Candidate], walls: FlatWalls, physical: tuple[PhysicalWall, ...], params: PlanParams) -> list[tuple]:
