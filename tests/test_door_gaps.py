@@ -229,7 +229,9 @@ def _two_rooms(doorway: str, leaf_top_m: float = 1.6):
       8 cm back from the near face (z = 4), with the reveals of its frame between them;
     * ``strip``: the near face not scanned at x 2-2.9 (a missing strip), the far face whole;
     * ``open``: open, its 4 cm leaf standing square to the wall in the near room, hinged at
-      x = 2: the leaf's edge lies in the near face's plane beside the jamb's reveal.
+      x = 2: the leaf's edge lies in the near face's plane beside the jamb's reveal;
+    * ``ajar``: the leaf open by 20 degrees only: its faces beside the hinge lie in the slab in
+      front of the near face, within 8 cm of it over 22 cm.
 
     Returns the flat walls and the openings found."""
     from meshplan.orient import orient
@@ -262,6 +264,14 @@ def _two_rooms(doorway: str, leaf_top_m: float = 1.6):
         b.quad([x0, 0, far], [x1 - x0, 0, 0], [0, leaf_top_m, 0])  # its far side, +z
         b.quad([x0, 0, d], [0, h, 0], [0, 0, t - 0.04])  # reveal facing +x
         b.quad([x1, 0, d], [0, 0, t - 0.04], [0, h, 0])  # reveal facing -x
+    elif doorway == "ajar":  # reveals through the wall, the leaf open 20 degrees into the near room
+        b.quad([x0, 0, d], [0, h, 0], [0, 0, t])
+        b.quad([x1, 0, d], [0, 0, t], [0, h, 0])
+        a = np.radians(20.0)
+        along = (x1 - x0) * np.array([np.cos(a), 0.0, -np.sin(a)])
+        across = 0.04 * np.array([np.sin(a), 0.0, np.cos(a)])  # the leaf's thickness, towards the wall
+        b.quad([x0, 0, d], along, [0, h, 0])  # the side facing the near room
+        b.quad(np.array([x0, 0, d]) + across, [0, h, 0], along)
     else:  # open: reveals through the wall and the leaf square to it in the near room
         b.quad([x0, 0, d], [0, h, 0], [0, 0, t])
         b.quad([x1, 0, d], [0, 0, t], [0, h, 0])
@@ -312,3 +322,11 @@ def test_the_edge_of_an_open_leaf_at_its_hinge_is_no_jamb() -> None:
     _, op = _two_rooms("open")
     assert list(op.kind) == ["door"]
     assert float(op.u_max[0] - op.u_min[0]) == pytest.approx(0.9, abs=0.01)
+
+
+def test_a_leaf_ajar_narrows_no_door() -> None:
+    """A leaf open by 20 degrees fills the slab in front of the face over 22 cm beside its hinge
+    (a wedge off the face's plane, on a plane turned from it): the jamb is the reveal beyond it."""
+    _, op = _two_rooms("ajar")
+    assert list(op.kind) == ["door"]
+    assert float(op.u_max[0] - op.u_min[0]) == pytest.approx(0.9, abs=0.02)

@@ -504,14 +504,48 @@ def _gaps(ev: WallEvidence, w: int, floor: float, ceiling: float) -> list[Candid
     thick = float(ev.thickness[w])
     inner = (-(thick - REVEAL_INSET_M), -REVEAL_INSET_M) if thick > 2 * REVEAL_INSET_M else None
 
+    face_raw = raster(at, near, -LEAF_SET_BACK_M)
+    band = (floor + params.opening_margin_m, floor + HEAD_UNSEEN_MIN_TOP_M)
+    band_rows = slice(margin, max(margin + 1, int(np.floor(HEAD_UNSEEN_MIN_TOP_M / cell))))
+    face_plane = raster(at, LEAF_PLANE_M, -LEAF_PLANE_M)
+    pts_u, pts_d = pts @ t3, pts @ n3 - off
+    in_band = (pts[:, 1] >= band[0]) & (pts[:, 1] <= band[1]) & (pts_d >= far) & (pts_d <= near)
+
+    def leaf_between(a: float, b: float) -> bool:
+        """Whether what the slab holds between ``a`` and ``b`` along the face (in the band of
+        :data:`HEAD_UNSEEN_MIN_TOP_M`) stands off the face's plane (within :data:`LEAF_PLANE_M`
+        of it in at most a quarter of the cells, ``opening_edge_straightness``) or is a leaf
+        standing open: a plane turned from the face by :data:`LEAF_MIN_TURN_DEG` or more (depth
+        growing along the face), the samples' median distance from it within :data:`LEAF_PLANE_M`."""
+        c0 = int(np.clip(np.floor((min(a, b) - lo) / cell) + 1, 0, ncol))
+        c1 = int(np.clip(np.floor((max(a, b) - lo) / cell), 0, ncol))
+        if c1 <= c0 or float(face_plane[band_rows, c0:c1].mean()) <= 1.0 - params.opening_edge_straightness:
+            return True  # the face's own plane (almost) empty: what the slab holds stands off it
+        sel = in_band & (pts_u > min(a, b)) & (pts_u < max(a, b))
+        if np.count_nonzero(sel) < 3:
+            return False
+        u, d = pts_u[sel], pts_d[sel]
+        slope, icept = np.polyfit(u - u.mean(), d, 1)
+        resid = d - (icept + slope * (u - u.mean()))
+        return bool(abs(slope) >= np.tan(np.radians(LEAF_MIN_TURN_DEG)) and np.median(np.abs(resid)) <= LEAF_PLANE_M)
+
     def to_reveals(left: float, right: float) -> tuple[float, float]:
-        """The jambs ``left`` and ``right`` moved out to the reveals beyond them (:data:`REVEAL_SHARE`)."""
+        """The jambs ``left`` and ``right`` moved out to the reveals beyond them (:data:`REVEAL_SHARE`):
+        within :data:`REVEAL_REACH_M`, or up to :data:`LEAF_WEDGE_M` where the face's own plane is
+        empty in between (the slab there holds a leaf standing open at its hinge)."""
         if inner is None:
             return left, right
         out = []
         for u, toward in ((left, 1.0), (right, -1.0)):
-            share, at = _reveal(ev, w, u, inner, floor + params.opening_margin_m, floor + HEAD_UNSEEN_MIN_TOP_M, toward)
-            out.append(at if share >= REVEAL_SHARE and 0.0 < (u - at) * toward <= REVEAL_REACH_M else u)
+            share, at = _reveal(ev, w, u, inner, band[0], band[1], toward)
+            if share >= REVEAL_SHARE and 0.0 < (u - at) * toward <= REVEAL_REACH_M:
+                u = at
+            else:
+                half = 0.5 * LEAF_WEDGE_M
+                share, at = _reveal(ev, w, u - toward * half, inner, band[0], band[1], toward, reach=half)
+                if share >= REVEAL_SHARE and REVEAL_REACH_M < (u - at) * toward <= LEAF_WEDGE_M and leaf_between(at, u):
+                    u = at
+            out.append(u)
         return out[0], out[1]
 
     frame = _Frame(grid, lo, floor, ceiling, cell, margin, vu, vy, w, left_corner is not None, right_corner is not None, to_reveals)
@@ -520,7 +554,6 @@ def _gaps(ev: WallEvidence, w: int, floor: float, ceiling: float) -> list[Candid
     # doors whose leaf stands closed in its frame: the same reading on the face's own plane only,
     # where the whole slab shows something behind the face (the leaf or the room beyond); only
     # gaps under a lintel scanned in that plane (the frame on three sides) count
-    face_raw = raster(at, near, -LEAF_SET_BACK_M)
     # (only where some column of the face's plane is empty from the floor to a door's height
     # and the whole slab's is not: closing only fills cells, so the raw raster tells)
     # and along the face itself (past its ends the whole slab holds the other face of a wall
@@ -595,12 +628,27 @@ REVEAL_REACH_M = 0.1
 #: times the cosine of its angle; its edge then lies in the face's plane, a jamb to the raster
 #: (the opening measured a leaf's thickness narrow), while the reveal behind it is the jamb.
 REVEAL_INSET_M = 0.02
+#: A leaf standing open by 10-35 degrees puts a wedge of its faces into the slab beside its
+#: hinge's jamb, off the face's own plane: the slab's raster finds the doorway narrowed by up to
+#: this much (m; half the narrowest door, ``door_width_m``), and the reveal beyond the wedge is
+#: the jamb where the face's own plane is empty in between.
+LEAF_WEDGE_M = 0.3
+#: ... which is a leaf when the slab's samples there lie on a plane (their median distance from
+#: the line fitted to them at most this, m: a 4 cm leaf's two faces, 2 cm either side of its
+#: middle, and the scan's noise) turned from the face by :data:`LEAF_MIN_TURN_DEG` or more, or
+#: stand off the face's plane (farther than this from it).
+LEAF_PLANE_M = 0.03
+#: A door leaf standing open turns from its wall by at least this angle (degrees); a leaf
+#: nearer to closed lies in the wall's plane and is part of the wall's face, or the door's.
+LEAF_MIN_TURN_DEG = 10.0
 
 
-def _reveal(ev: WallEvidence, w: int, u: float, d_range: tuple[float, float], low: float, high: float, toward: float = 0.0) -> tuple[float, float]:
+def _reveal(
+    ev: WallEvidence, w: int, u: float, d_range: tuple[float, float], low: float, high: float, toward: float = 0.0, reach: float = REVEAL_REACH_M
+) -> tuple[float, float]:
     """The reveal at a jamb ``u`` along face ``w``: ``(share, position)``, the share of the rows
     (of ``opening_cell_m``) from ``low`` to ``high`` holding a face across the wall's depth (facing
-    along the wall, in ``d_range`` across it, within :data:`REVEAL_REACH_M` of ``u``) and the
+    along the wall, in ``d_range`` across it, within ``reach`` of ``u``) and the
     area-weighted median position of those faces along the wall (``nan`` without any). With
     ``toward`` (+1 or -1) only the faces facing that way along the tangent count: those facing
     into the opening."""
@@ -609,13 +657,13 @@ def _reveal(ev: WallEvidence, w: int, u: float, d_range: tuple[float, float], lo
     t3 = np.array([walls.tangent[w][0], 0.0, walls.tangent[w][1]])
     off = float(walls.offset[w])
     nrow = max(1, int(np.ceil((high - low) / cell)))
-    faces = ev.near(ev.across(w), n3, t3, off, d_range, (u - REVEAL_REACH_M, u + REVEAL_REACH_M), (low, high))
+    faces = ev.near(ev.across(w), n3, t3, off, d_range, (u - reach, u + reach), (low, high))
     if toward:
         faces = faces[ev.normals[faces] @ t3 * toward > 0]
     tri = ev.tri[faces]
     d, y = tri @ n3 - off, tri[:, :, 1]
     cu = ev.centroids[faces] @ t3
-    ok = (_max3(d) >= d_range[0]) & (_min3(d) <= d_range[1]) & (np.abs(cu - u) <= REVEAL_REACH_M)
+    ok = (_max3(d) >= d_range[0]) & (_min3(d) <= d_range[1]) & (np.abs(cu - u) <= reach)
     ok &= (_max3(y) >= low) & (_min3(y) <= high)
     if not ok.any():
         return 0.0, float("nan")

@@ -32,7 +32,7 @@ from ..geometry import FloatArray, IntArray, Mesh
 from ..orient import Orientation
 from ..walls import FlatWalls, PhysicalWall, WallParams, physical_walls
 from ..walls.flat import segment_distances
-from .doors import EDGE_CELLS, Candidate, WallEvidence, wall_candidates
+from .doors import EDGE_CELLS, LEAF_MIN_TURN_DEG, Candidate, WallEvidence, wall_candidates
 from .params import PlanParams
 
 #: Two finds on parallel faces are one opening when their intervals along the wall overlap by
@@ -193,9 +193,6 @@ def find_openings(
     )
 
 
-#: A door leaf standing open turns from its wall by at least this angle (degrees); a leaf
-#: nearer to closed lies in the wall's plane and is part of the wall's face, or the door's.
-LEAF_MIN_TURN_DEG = 10.0
 #: A leaf's hinge lies this close (m) to the flat wall found on the leaf: the hinge stands on a
 #: jamb of the door, on either face of the wall, and that flat wall stops 5-15 cm short of it
 #: where the scan rounds the corner between leaf and frame.
