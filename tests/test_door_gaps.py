@@ -194,6 +194,13 @@ def test_a_gap_lower_than_the_wall_beside_it_is_no_headless_door():
     assert _headless(1.8, jamb_top_m=1.4) == []
 
 
+def test_a_jamb_scanned_a_little_lower_than_the_wall_beside_it_is_a_headless_door():
+    """The jambs' pieces of wall scanned to 1.65 m, the wall beyond them to 1.8 m (the scan's top
+    steps by 15 cm from one piece to the next): still the wall's full scanned height, a door."""
+    (door,) = _headless(1.8, jamb_top_m=1.65)
+    assert door.how == "head unseen"
+
+
 def test_a_window_whose_head_was_not_scanned_is_found_from_its_sill_and_jambs():
     """A face scanned to 1.7 m (nothing above) with an empty rectangle from a 0.9 m sill up to
     where the scan stopped, 1.0-2.2 m along: a window with an assumed head. The same face with

@@ -944,17 +944,25 @@ def _doors(f: _Frame, walls: FlatWalls, floor_cols: np.ndarray, params: PlanPara
     return out
 
 
+#: Cells (of ``opening_cell_m``) a jamb of a doorway whose head was not scanned may stop below
+#: the wall's scanned top beside it (:func:`_jambs_reach_wall_top`): the scan's top steps by up
+#: to 15 cm from one piece of wall to the next (the hard synthetic scans' pieces stop at 1.4-2.0 m
+#: at random; a door's jamb piece 15 cm lower than the next piece is common there), while the
+#: jambs of a hole in the scan stop 40 cm and more below the wall around it.
+JAMB_TOP_CELLS = 4
+
+
 def _jambs_reach_wall_top(f: _Frame, col_top: FloatArray, left: int, right: int) -> bool:
     """Whether the wall at each jamb (the highest of the columns ``left`` and ``right`` and the
     :data:`EDGE_CELLS` next to them in the wall, for the rounded or decimated corner of a jamb)
-    rises within :data:`EDGE_CELLS` cells of the top of the wall scanned beside it (the median
+    rises within :data:`JAMB_TOP_CELLS` cells of the top of the wall scanned beside it (the median
     top of the columns within :data:`HEAD_UNSEEN_CONTEXT_M` on its side, the columns a corner
     closes left out: a ragged top scatters by a few cells): the gap's edges are the wall's full
     scanned height, not a hole lower in it."""
     k = max(1, int(np.ceil(HEAD_UNSEEN_CONTEXT_M / f.cell)))
     first = EDGE_CELLS if f.left_corner else 0
     stop = len(col_top) - EDGE_CELLS if f.right_corner else len(col_top)
-    tol = EDGE_CELLS * f.cell
+    tol = JAMB_TOP_CELLS * f.cell
 
     def tops(a: int, b: int) -> FloatArray:
         return col_top[max(a, first) : min(b, stop)]
