@@ -337,3 +337,35 @@ def test_a_leaf_ajar_narrows_no_door() -> None:
     _, op = _two_rooms("ajar")
     assert list(op.kind) == ["door"]
     assert float(op.u_max[0] - op.u_min[0]) == pytest.approx(0.9, abs=0.02)
+
+
+@pytest.mark.parametrize("sill_m, window", [(0.9, True), (1.4, False)])
+def test_a_window_between_pieces_of_wall_scanned_to_different_heights(sill_m: float, window: bool) -> None:
+    """A face whose pieces were scanned to different heights (1.9 m up to 2.6 m along, 1.6 m at
+    its far end) with a wide piece scanned to the sill between 1.0 and 2.2 m and long low parapets
+    beyond it
+    (so that the face's median top, 1.0 m, says nothing): the notch from a 0.9 m sill up to the
+    lower jamb's top is a window with an assumed head; a piece scanned to 1.4 m between higher
+    ones is where the scan stopped, not a sill (above :data:`HEAD_UNSEEN_MIN_TOP_M`)."""
+    from meshplan.plan.doors import WINDOW_HEAD_ASSUMED_M, _notch_windows
+
+    f = _frame(CEILING, length_m=6.0)
+    grid = np.ones_like(f.grid)
+    nrow = grid.shape[0]
+    rows = np.arange(nrow)[:, None]
+    cols = np.arange(grid.shape[1])
+    top = np.where(cols < int(round(2.6 / CELL)), 1.9, 1.6)
+    top[int(round(1.0 / CELL)) : int(round(2.2 / CELL))] = sill_m
+    top[int(round(2.6 / CELL)) :] = 1.0  # long parapets under other windows, scanned to 1.0 m
+    top[int(round(5.6 / CELL)) :] = 1.6
+    grid[(rows >= np.round(top / CELL)[None, :]) & (rows < nrow - f.margin)] = False
+    walls = SimpleNamespace(u_min=np.array([0.0]), u_max=np.array([6.0]))
+    frame = _Frame(grid, f.lo, f.floor, f.ceiling, f.cell, f.margin, np.zeros(0), np.zeros(0), 0, False, False)
+    found = [c for c in _notch_windows(frame, walls, PlanParams()) if c.u_max <= 2.5]
+    if not window:
+        assert found == []
+        return
+    (w,) = found
+    assert w.kind == "window" and w.how == "head unseen"
+    assert (w.u_min, w.u_max, w.bottom) == pytest.approx((1.0, 2.2, sill_m), abs=CELL)
+    assert w.top == pytest.approx(WINDOW_HEAD_ASSUMED_M)

@@ -551,6 +551,7 @@ def _gaps(ev: WallEvidence, w: int, floor: float, ceiling: float) -> list[Candid
     frame = _Frame(grid, lo, floor, ceiling, cell, margin, vu, vy, w, left_corner is not None, right_corner is not None, to_reveals)
     found = _doors(frame, walls, floor_cols, params) + _windows(frame, walls, params)
     found += [c for c in _headless_windows(frame, walls, params) if not any(_overlap(c, o) for o in found)]
+    found += [c for c in _notch_windows(frame, walls, params) if not any(_overlap(c, o) for o in found)]
     # doors whose leaf stands closed in its frame: the same reading on the face's own plane only,
     # where the whole slab shows something behind the face (the leaf or the room beyond); only
     # gaps under a lintel scanned in that plane (the frame on three sides) count
@@ -1031,6 +1032,46 @@ def _headless_windows(f: _Frame, walls: FlatWalls, params: PlanParams) -> list[C
     grid[top_row + 1 :] = True  # the unscanned band: wall, as far as a window is concerned
     out = []
     for c in _window_regions(replace(f, grid=grid), walls, params, ~grid):
+        if c.top >= scanned_top - EDGE_CELLS * cell:  # up to where the scan stopped
+            out.append(replace(c, top=max(c.top, f.floor + WINDOW_HEAD_ASSUMED_M), how="head unseen"))
+    return out
+
+
+def _notch_windows(f: _Frame, walls: FlatWalls, params: PlanParams) -> list[Candidate]:
+    """Windows in a face scanned only up to heights below its ceiling that vary along it (the
+    scan's top steps from one piece of wall to the next, so that the face's median top of
+    :func:`_headless_windows` cuts through the pieces beside a window): each column's unscanned
+    space above the lower of the highest columns within the widest window on either side (the
+    jambs' tops) is taken as wall, so that a window whose head stands in it shows as an empty
+    rectangle from its sill up to the lower jamb's top, framed by straight jambs and a sill
+    (:func:`_window_regions`). Its sill lies no higher than :data:`HEAD_UNSEEN_MIN_TOP_M` (a
+    piece of wall scanned lower than those beside it, higher up, is where the scan stopped), its
+    jambs rise above that and stop below the ceiling; its head is assumed
+    (:data:`WINDOW_HEAD_ASSUMED_M`)."""
+    g, cell, m = f.grid, f.cell, f.margin
+    nrow, ncol = g.shape
+    body = g[m : nrow - m]
+    col_u = f.lo + (np.arange(ncol) + 0.5) * cell
+    filled = body.any(axis=0)
+    if not (filled & (col_u >= walls.u_min[f.wall]) & (col_u <= walls.u_max[f.wall])).any():
+        return []
+    top_rows = np.where(filled, body.shape[0] - 1 - np.argmax(body[::-1], axis=0) + m, -1)  # the last row of wall
+    k = int(np.ceil(params.window_width_m[1] / cell))
+    # the highest column within k columns on each side of each column (itself included)
+    left = ndimage.maximum_filter1d(top_rows, size=k + 1, origin=k // 2, mode="nearest")
+    right = ndimage.maximum_filter1d(top_rows, size=k + 1, origin=-(k // 2) - (k % 2), mode="nearest")
+    cap = np.minimum(left, right)
+    grid = g.copy()
+    grid[np.arange(nrow)[:, None] > cap[None, :]] = True
+    out = []
+    for c in _window_regions(replace(f, grid=grid), walls, params, ~grid):
+        if c.bottom > f.floor + HEAD_UNSEEN_MIN_TOP_M:
+            continue
+        a = int(np.clip(np.floor((c.u_min - f.lo) / cell), 0, ncol - 1))
+        b = int(np.clip(np.ceil((c.u_max - f.lo) / cell), a + 1, ncol))
+        scanned_top = f.floor + (int(cap[a:b].min()) + 1) * cell  # the lower jamb's top
+        if scanned_top >= f.ceiling - params.opening_margin_m - EDGE_CELLS * cell or scanned_top - f.floor < HEAD_UNSEEN_MIN_TOP_M:
+            continue  # jambs scanned to the ceiling (the head would show), or no higher than the work surfaces
         if c.top >= scanned_top - EDGE_CELLS * cell:  # up to where the scan stopped
             out.append(replace(c, top=max(c.top, f.floor + WINDOW_HEAD_ASSUMED_M), how="head unseen"))
     return out
