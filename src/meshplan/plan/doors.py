@@ -17,7 +17,12 @@ across it, positive into the room the face was scanned from):
   lintel, runs up to the ceiling with the floor seen through it beyond the wall. It is a window
   when it has a sill and a head and straight edges on all four sides, or, where a scan hole
   runs into its frame, when the largest rectangle in the empty region is framed by wall on
-  three sides at least. Scan holes are ragged and are left alone.
+  three sides at least, or, where the scan stopped below its head, when it is a notch from a
+  sill up to where the jambs beside it were scanned. Scan holes are ragged and are left alone.
+  A door's jambs are its *reveals*, the faces across the wall's depth: an open leaf's edge or
+  the wedge of a leaf ajar in the slab beside its hinge is no jamb, and a doorway seen in the
+  face's own plane over a closed leaf whose head was not scanned is a door only between
+  reveals (a strip of the face the scan missed has none).
 * **recesses**: a window whose glazing (a blind, a lattice) was scanned, set back in a reveal
   behind the face, leaves no gap in the slab. The face's own plane and the surfaces behind it
   that face the room are rasterized apart; a region behind the face where its plane is missing
@@ -531,8 +536,8 @@ def _gaps(ev: WallEvidence, w: int, floor: float, ceiling: float) -> list[Candid
 
     def to_reveals(left: float, right: float) -> tuple[float, float]:
         """The jambs ``left`` and ``right`` moved out to the reveals beyond them (:data:`REVEAL_SHARE`):
-        within :data:`REVEAL_REACH_M`, or up to :data:`LEAF_WEDGE_M` where the face's own plane is
-        empty in between (the slab there holds a leaf standing open at its hinge)."""
+        within :data:`REVEAL_REACH_M`, or up to :data:`LEAF_WEDGE_M` where the slab in between
+        holds a leaf standing open at its hinge (``leaf_between``)."""
         if inner is None:
             return left, right
         out = []
@@ -632,7 +637,7 @@ REVEAL_INSET_M = 0.02
 #: A leaf standing open by 10-35 degrees puts a wedge of its faces into the slab beside its
 #: hinge's jamb, off the face's own plane: the slab's raster finds the doorway narrowed by up to
 #: this much (m; half the narrowest door, ``door_width_m``), and the reveal beyond the wedge is
-#: the jamb where the face's own plane is empty in between.
+#: the jamb ...
 LEAF_WEDGE_M = 0.3
 #: ... which is a leaf when the slab's samples there lie on a plane (their median distance from
 #: the line fitted to them at most this, m: a 4 cm leaf's two faces, 2 cm either side of its
