@@ -194,6 +194,13 @@ def test_a_gap_lower_than_the_wall_beside_it_is_no_headless_door():
     assert _headless(1.8, jamb_top_m=1.4) == []
 
 
+def test_a_jamb_scanned_a_little_lower_than_the_wall_beside_it_is_a_headless_door():
+    """The jambs' pieces of wall scanned to 1.65 m, the wall beyond them to 1.8 m (the scan's top
+    steps by 15 cm from one piece to the next): still the wall's full scanned height, a door."""
+    (door,) = _headless(1.8, jamb_top_m=1.65)
+    assert door.how == "head unseen"
+
+
 def test_a_window_whose_head_was_not_scanned_is_found_from_its_sill_and_jambs():
     """A face scanned to 1.7 m (nothing above) with an empty rectangle from a 0.9 m sill up to
     where the scan stopped, 1.0-2.2 m along: a window with an assumed head. The same face with
@@ -215,3 +222,150 @@ def test_a_window_whose_head_was_not_scanned_is_found_from_its_sill_and_jambs():
     grid[: f.margin] = True
     frame = _Frame(grid, f.lo, f.floor, f.ceiling, f.cell, f.margin, np.zeros(0), np.zeros(0), 0, False, False)
     assert _headless_windows(frame, walls, PlanParams()) == []
+
+
+# ------------------------------------------------------------- leaves in doorways, heads unseen
+
+
+def _two_rooms(doorway: str, leaf_top_m: float = 1.6):
+    """Two rooms 6 m wide, z 0-4 and 4.12-8, on either side of a 12 cm partition, their walls
+    scanned from the floor up to 1.6 m only and no ceiling (a user who never looks up: the hard
+    synthetic preset), with a doorway at x 2-2.9 in the partition:
+
+    * ``closed``: its leaf closed flush with the far face (z 4.08-4.12, up to ``leaf_top_m``),
+      8 cm back from the near face (z = 4), with the reveals of its frame between them;
+    * ``strip``: the near face not scanned at x 2-2.9 (a missing strip), the far face whole;
+    * ``open``: open, its 4 cm leaf standing square to the wall in the near room, hinged at
+      x = 2: the leaf's edge lies in the near face's plane beside the jamb's reveal;
+    * ``ajar``: the leaf open by 20 degrees only: its faces beside the hinge lie in the slab in
+      front of the near face, within 8 cm of it over 22 cm.
+
+    Returns the flat walls and the openings found."""
+    from meshplan.orient import orient
+    from meshplan.orient.params import OrientParams
+    from meshplan.plan import find_openings
+    from meshplan.walls import find_flat_walls
+    from test_walls_real import _Builder
+
+    b = _Builder()
+    w, d, t, h = 6.0, 4.0, 0.12, 1.6
+    x0, x1 = 2.0, 2.9
+    far = d + t
+    b.quad([0, 0, 0], [0, 0, d], [w, 0, 0])  # floor of the near room, +y
+    b.quad([0, 0, far], [0, 0, d], [w, 0, 0])  # floor of the far room
+    b.quad([0, 0, 0], [w, 0, 0], [0, h, 0])  # z = 0, +z
+    b.quad([0, 0, far + d], [0, h, 0], [w, 0, 0])  # z = 8.12, -z
+    for z0, z1 in ((0.0, d), (far, far + d)):
+        b.quad([0, 0, z0], [0, h, 0], [0, 0, z1 - z0])  # x = 0, +x
+        b.quad([w, 0, z0], [0, 0, z1 - z0], [0, h, 0])  # x = w, -x
+    # the partition: its near face (z = 4, facing the near room, -z) and far face (+z)
+    b.quad([0, 0, d], [0, h, 0], [x0, 0, 0])
+    b.quad([x1, 0, d], [0, h, 0], [w - x1, 0, 0])
+    if doorway == "strip":
+        b.quad([0, 0, far], [w, 0, 0], [0, h, 0])
+        return _openings_of(b, orient, OrientParams, find_flat_walls, find_openings)
+    b.quad([0, 0, far], [x0, 0, 0], [0, h, 0])
+    b.quad([x1, 0, far], [w - x1, 0, 0], [0, h, 0])
+    if doorway == "closed":
+        b.quad([x0, 0, far - 0.04], [0, leaf_top_m, 0], [x1 - x0, 0, 0])  # the leaf's near side, -z
+        b.quad([x0, 0, far], [x1 - x0, 0, 0], [0, leaf_top_m, 0])  # its far side, +z
+        b.quad([x0, 0, d], [0, h, 0], [0, 0, t - 0.04])  # reveal facing +x
+        b.quad([x1, 0, d], [0, 0, t - 0.04], [0, h, 0])  # reveal facing -x
+    elif doorway == "ajar":  # reveals through the wall, the leaf open 20 degrees into the near room
+        b.quad([x0, 0, d], [0, h, 0], [0, 0, t])
+        b.quad([x1, 0, d], [0, 0, t], [0, h, 0])
+        a = np.radians(20.0)
+        along = (x1 - x0) * np.array([np.cos(a), 0.0, -np.sin(a)])
+        across = 0.04 * np.array([np.sin(a), 0.0, np.cos(a)])  # the leaf's thickness, towards the wall
+        b.quad([x0, 0, d], along, [0, h, 0])  # the side facing the near room
+        b.quad(np.array([x0, 0, d]) + across, [0, h, 0], along)
+    else:  # open: reveals through the wall and the leaf square to it in the near room
+        b.quad([x0, 0, d], [0, h, 0], [0, 0, t])
+        b.quad([x1, 0, d], [0, 0, t], [0, h, 0])
+        b.quad([x0, 0, d - x1 + x0], [0, 0, x1 - x0], [0, h, 0])  # leaf side facing -x
+        b.quad([x0 + 0.04, 0, d - x1 + x0], [0, h, 0], [0, 0, x1 - x0])  # facing +x
+        b.quad([x0, 0, d], [0.04, 0, 0], [0, h, 0])  # its edge at the hinge, in the face's plane
+        b.quad([x0, 0, d - x1 + x0], [0, h, 0], [0.04, 0, 0])  # its free edge
+    return _openings_of(b, orient, OrientParams, find_flat_walls, find_openings)
+
+
+def _openings_of(b, orient, OrientParams, find_flat_walls, find_openings):
+    mesh = b.mesh()
+    ori = orient(mesh, OrientParams(), up_hint=np.array([0.0, 1.0, 0.0]))
+    plan_mesh = mesh.transformed(ori.transform).with_flipped(ori.flipped)
+    walls = find_flat_walls(plan_mesh, ori)
+    return walls, find_openings(plan_mesh, ori, walls)
+
+
+def test_a_closed_leaf_whose_head_was_not_scanned_is_a_closed_door() -> None:
+    """A leaf closed 8 cm back from the near face, with its frame's reveals, in a wall scanned to
+    1.6 m: a doorway in the near face's plane, its head assumed, marked closed (low confidence)."""
+    _, op = _two_rooms("closed")
+    assert list(op.kind) == ["door"]
+    assert op.closed == (True,)
+    assert float(op.u_max[0] - op.u_min[0]) == pytest.approx(0.9, abs=0.03)
+    assert float(op.top[0]) == pytest.approx(DOOR_HEAD_ASSUMED_M)
+
+
+def test_a_strip_missing_from_a_face_is_no_door() -> None:
+    """The near face not scanned over a door's width, the far face of the wall behind it (facing
+    away) and no reveals at the strip's edges: a hole in the scan, not a closed door."""
+    _, op = _two_rooms("strip")
+    assert list(op.kind) == []
+
+
+def test_a_leaf_scanned_lower_than_its_wall_is_a_door_not_a_window() -> None:
+    """The closed leaf scanned up to 1.2 m where the wall beside it reaches 1.6 m: the band above
+    the leaf is empty in the whole slab between the jambs (a "window" from a 1.2 m sill up to the
+    scan's top), which the doorway in the near face's plane explains."""
+    _, op = _two_rooms("closed", leaf_top_m=1.2)
+    assert list(op.kind) == ["door"]
+
+
+def test_the_edge_of_an_open_leaf_at_its_hinge_is_no_jamb() -> None:
+    """A leaf standing open square to the wall puts its 4 cm edge in the face's plane beside the
+    hinge's jamb: the opening is measured to the reveal behind it, its full 0.9 m (the scorer's
+    and the truth's ``width``; the clear width less the leaf is the element's)."""
+    _, op = _two_rooms("open")
+    assert list(op.kind) == ["door"]
+    assert float(op.u_max[0] - op.u_min[0]) == pytest.approx(0.9, abs=0.01)
+
+
+def test_a_leaf_ajar_narrows_no_door() -> None:
+    """A leaf open by 20 degrees fills the slab in front of the face over 22 cm beside its hinge
+    (a wedge off the face's plane, on a plane turned from it): the jamb is the reveal beyond it."""
+    _, op = _two_rooms("ajar")
+    assert list(op.kind) == ["door"]
+    assert float(op.u_max[0] - op.u_min[0]) == pytest.approx(0.9, abs=0.02)
+
+
+@pytest.mark.parametrize("sill_m, window", [(0.9, True), (1.4, False)])
+def test_a_window_between_pieces_of_wall_scanned_to_different_heights(sill_m: float, window: bool) -> None:
+    """A face whose pieces were scanned to different heights (1.9 m up to 2.6 m along, 1.6 m at
+    its far end) with a wide piece scanned to the sill between 1.0 and 2.2 m and long low parapets
+    beyond it
+    (so that the face's median top, 1.0 m, says nothing): the notch from a 0.9 m sill up to the
+    lower jamb's top is a window with an assumed head; a piece scanned to 1.4 m between higher
+    ones is where the scan stopped, not a sill (above :data:`HEAD_UNSEEN_MIN_TOP_M`)."""
+    from meshplan.plan.doors import WINDOW_HEAD_ASSUMED_M, _notch_windows
+
+    f = _frame(CEILING, length_m=6.0)
+    grid = np.ones_like(f.grid)
+    nrow = grid.shape[0]
+    rows = np.arange(nrow)[:, None]
+    cols = np.arange(grid.shape[1])
+    top = np.where(cols < int(round(2.6 / CELL)), 1.9, 1.6)
+    top[int(round(1.0 / CELL)) : int(round(2.2 / CELL))] = sill_m
+    top[int(round(2.6 / CELL)) :] = 1.0  # long parapets under other windows, scanned to 1.0 m
+    top[int(round(5.6 / CELL)) :] = 1.6
+    grid[(rows >= np.round(top / CELL)[None, :]) & (rows < nrow - f.margin)] = False
+    walls = SimpleNamespace(u_min=np.array([0.0]), u_max=np.array([6.0]))
+    frame = _Frame(grid, f.lo, f.floor, f.ceiling, f.cell, f.margin, np.zeros(0), np.zeros(0), 0, False, False)
+    found = [c for c in _notch_windows(frame, walls, PlanParams()) if c.u_max <= 2.5]
+    if not window:
+        assert found == []
+        return
+    (w,) = found
+    assert w.kind == "window" and w.how == "head unseen"
+    assert (w.u_min, w.u_max, w.bottom) == pytest.approx((1.0, 2.2, sill_m), abs=CELL)
+    assert w.top == pytest.approx(WINDOW_HEAD_ASSUMED_M)

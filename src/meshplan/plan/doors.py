@@ -17,7 +17,12 @@ across it, positive into the room the face was scanned from):
   lintel, runs up to the ceiling with the floor seen through it beyond the wall. It is a window
   when it has a sill and a head and straight edges on all four sides, or, where a scan hole
   runs into its frame, when the largest rectangle in the empty region is framed by wall on
-  three sides at least. Scan holes are ragged and are left alone.
+  three sides at least, or, where the scan stopped below its head, when it is a notch from a
+  sill up to where the jambs beside it were scanned. Scan holes are ragged and are left alone.
+  A door's jambs are its *reveals*, the faces across the wall's depth: an open leaf's edge or
+  the wedge of a leaf ajar in the slab beside its hinge is no jamb, and a doorway seen in the
+  face's own plane over a closed leaf whose head was not scanned is a door only between
+  reveals (a strip of the face the scan missed has none).
 * **recesses**: a window whose glazing (a blind, a lattice) was scanned, set back in a reveal
   behind the face, leaves no gap in the slab. The face's own plane and the surfaces behind it
   that face the room are rasterized apart; a region behind the face where its plane is missing
@@ -196,10 +201,13 @@ class Candidate:
 class WallEvidence:
     """The mesh arranged once for every wall face's search."""
 
-    def __init__(self, mesh: Mesh, walls: FlatWalls, params: PlanParams) -> None:
+    def __init__(self, mesh: Mesh, walls: FlatWalls, params: PlanParams, thickness: FloatArray | None = None) -> None:
         self.mesh = mesh
         self.walls = walls
         self.params = params
+        #: per face, the thickness (m) of its physical wall (measured between its two faces, or
+        #: the default of a wall seen from one side); ``nan`` where unknown
+        self.thickness = np.asarray(thickness, dtype=np.float64) if thickness is not None else np.full(len(walls), np.nan)
         self.tri = mesh.triangles
         self.normals = mesh.face_normals
         self.centroids = mesh.face_centroids
@@ -272,6 +280,19 @@ class WallEvidence:
                 self._vertical_normals = self.normals[v]
             self._sorted(key, w, v[np.abs(self._vertical_normals @ n3) >= self.cos])
         return self.slab_faces(np.zeros(0, np.int64), key, w, d_range, u_range)
+
+    def across(self, w: int) -> IntArray:
+        """The vertical faces facing along face ``w``'s tangent (either way, within
+        ``opening_facing_deg``): jambs, reveals and returns across its wall's depth."""
+        key = ("across", int(self.walls.direction[w]))
+        if key not in self._cache:
+            n3 = self._direction_normal(w)
+            t3 = np.array([-n3[2], 0.0, n3[0]])
+            v = self.vertical
+            if self._vertical_normals is None:
+                self._vertical_normals = self.normals[v]
+            self._cache[key] = (np.zeros(0), v[np.abs(self._vertical_normals @ t3) >= self.cos], np.zeros(0, np.int64))
+        return self._cache[key][1]
 
     def floor_faces(self, w: int, floor: float, d_range: tuple[float, float], u_range: tuple[float, float]) -> IntArray:
         """The floor faces at height ``floor`` that may reach the box ``d_range`` across and
@@ -483,13 +504,62 @@ def _gaps(ev: WallEvidence, w: int, floor: float, ceiling: float) -> list[Candid
     verts, vd = verts[in_slab], vd[in_slab]
     vu, vy = verts @ t3, verts[:, 1]
     floor_cols = _floor_beyond(ev, w, n3, t3, off, floor, lo, ncol, cell, params)
-    frame = _Frame(grid, lo, floor, ceiling, cell, margin, vu, vy, w, left_corner is not None, right_corner is not None)
+    # the wall's depth between its faces, inset from both (a leaf standing open at its hinge
+    # reaches into the wall's depth by its thickness times the cosine of its angle at most)
+    thick = float(ev.thickness[w])
+    inner = (-(thick - REVEAL_INSET_M), -REVEAL_INSET_M) if thick > 2 * REVEAL_INSET_M else None
+
+    face_raw = raster(at, near, -LEAF_SET_BACK_M)
+    band = (floor + params.opening_margin_m, floor + HEAD_UNSEEN_MIN_TOP_M)
+    band_rows = slice(margin, max(margin + 1, int(np.floor(HEAD_UNSEEN_MIN_TOP_M / cell))))
+    face_plane = raster(at, LEAF_PLANE_M, -LEAF_PLANE_M)
+    pts_u, pts_d = pts @ t3, pts @ n3 - off
+    in_band = (pts[:, 1] >= band[0]) & (pts[:, 1] <= band[1]) & (pts_d >= far) & (pts_d <= near)
+
+    def leaf_between(a: float, b: float) -> bool:
+        """Whether what the slab holds between ``a`` and ``b`` along the face (in the band of
+        :data:`HEAD_UNSEEN_MIN_TOP_M`) stands off the face's plane (within :data:`LEAF_PLANE_M`
+        of it in at most a quarter of the cells, ``opening_edge_straightness``) or is a leaf
+        standing open: a plane turned from the face by :data:`LEAF_MIN_TURN_DEG` or more (depth
+        growing along the face), the samples' median distance from it within :data:`LEAF_PLANE_M`."""
+        c0 = int(np.clip(np.floor((min(a, b) - lo) / cell) + 1, 0, ncol))
+        c1 = int(np.clip(np.floor((max(a, b) - lo) / cell), 0, ncol))
+        if c1 <= c0 or float(face_plane[band_rows, c0:c1].mean()) <= 1.0 - params.opening_edge_straightness:
+            return True  # the face's own plane (almost) empty: what the slab holds stands off it
+        sel = in_band & (pts_u > min(a, b)) & (pts_u < max(a, b))
+        if np.count_nonzero(sel) < 3:
+            return False
+        u, d = pts_u[sel], pts_d[sel]
+        slope, icept = np.polyfit(u - u.mean(), d, 1)
+        resid = d - (icept + slope * (u - u.mean()))
+        return bool(abs(slope) >= np.tan(np.radians(LEAF_MIN_TURN_DEG)) and np.median(np.abs(resid)) <= LEAF_PLANE_M)
+
+    def to_reveals(left: float, right: float) -> tuple[float, float]:
+        """The jambs ``left`` and ``right`` moved out to the reveals beyond them (:data:`REVEAL_SHARE`):
+        within :data:`REVEAL_REACH_M`, or up to :data:`LEAF_WEDGE_M` where the slab in between
+        holds a leaf standing open at its hinge (``leaf_between``)."""
+        if inner is None:
+            return left, right
+        out = []
+        for u, toward in ((left, 1.0), (right, -1.0)):
+            share, at = _reveal(ev, w, u, inner, band[0], band[1], toward)
+            if share >= REVEAL_SHARE and 0.0 < (u - at) * toward <= REVEAL_REACH_M:
+                u = at
+            else:
+                half = 0.5 * LEAF_WEDGE_M
+                share, at = _reveal(ev, w, u - toward * half, inner, band[0], band[1], toward, reach=half)
+                if share >= REVEAL_SHARE and REVEAL_REACH_M < (u - at) * toward <= LEAF_WEDGE_M and leaf_between(at, u):
+                    u = at
+            out.append(u)
+        return out[0], out[1]
+
+    frame = _Frame(grid, lo, floor, ceiling, cell, margin, vu, vy, w, left_corner is not None, right_corner is not None, to_reveals)
     found = _doors(frame, walls, floor_cols, params) + _windows(frame, walls, params)
     found += [c for c in _headless_windows(frame, walls, params) if not any(_overlap(c, o) for o in found)]
+    found += [c for c in _notch_windows(frame, walls, params) if not any(_overlap(c, o) for o in found)]
     # doors whose leaf stands closed in its frame: the same reading on the face's own plane only,
     # where the whole slab shows something behind the face (the leaf or the room beyond); only
     # gaps under a lintel scanned in that plane (the frame on three sides) count
-    face_raw = raster(at, near, -LEAF_SET_BACK_M)
     # (only where some column of the face's plane is empty from the floor to a door's height
     # and the whole slab's is not: closing only fills cells, so the raw raster tells)
     # and along the face itself (past its ends the whole slab holds the other face of a wall
@@ -502,14 +572,26 @@ def _gaps(ev: WallEvidence, w: int, floor: float, ceiling: float) -> list[Candid
         in_face = vd >= -LEAF_SET_BACK_M
         leaf = replace(frame, grid=face_grid, vu=vu[in_face], vy=vy[in_face])
         for c in _doors(leaf, walls, floor_cols, params):
-            if any(_overlap(c, o) for o in found):
+            # a leaf scanned lower than the wall beside it leaves the band above its scanned top
+            # empty in the whole slab, between the door's jambs: a "window" without a head
+            # (:func:`_headless_windows`) that the doorway in the face's plane explains
+            over = [o for o in found if _overlap(c, o)]
+            if any(o.kind != "window" or o.how != "head unseen" or not _same_jambs(c, o, EDGE_CELLS * cell) for o in over):
                 continue
+            before = len(found)
             if c.how in ("gap", "corner"):
                 found.append(replace(c, how="leaf"))
             elif c.how == "head unseen" and _open_in_slab(grid, door_rows, lo, cell, c):
                 # a leaf standing open reaches into the slab by its hinge only, a wedge beside
                 # one jamb that the face's own plane does not hold: the doorway is open
                 found.append(c)
+            elif c.how == "head unseen" and _revealed(ev, w, c, (far, near), floor + params.opening_margin_m, floor + HEAD_UNSEEN_MIN_TOP_M):
+                # a leaf closed in its frame, or standing a little open with its faces in the
+                # slab all over the doorway (a missing strip of the face, with the far face of
+                # its wall behind, has no reveals at its edges)
+                found.append(replace(c, how="leaf"))
+            if len(found) > before and over:
+                found = [o for o in found if not any(o is x for x in over)]
     # windows whose glazing was scanned, set back in a reveal: holes in the face's own plane
     # over a surface behind it that faces the room (the wall's far face faces away)
     room = ev.normals[cand][keep] @ n3 > ev.cos
@@ -533,6 +615,84 @@ def _gaps(ev: WallEvidence, w: int, floor: float, ceiling: float) -> list[Candid
 #: by its hinge only) when at least this share of its columns is empty in the whole slab, from
 #: the floor to a door's height; a closed leaf set back in its frame fills them all.
 OPEN_IN_SLAB_SHARE = 0.5
+
+
+#: A doorway found in the face's own plane whose head the scan did not reach, with the whole slab
+#: holding something over it (a leaf closed in its frame, or standing a little open), is a door
+#: when both its jambs show a reveal: faces across the wall's depth (facing along the wall) within
+#: :data:`REVEAL_REACH_M` of each jamb, at heights covering at least this share of the rows (of
+#: ``opening_cell_m``) from the floor band up to :data:`HEAD_UNSEEN_MIN_TOP_M`. A strip of the face
+#: that the scan missed shows the far face of its wall behind it and has no reveal at its edges (0
+#: rows on the hard synthetic scans, 25-35 rows of 5 cm at a door's jambs there).
+REVEAL_SHARE = 0.5
+#: ... within this distance (m) along the wall of the jamb: the grid's quantization of the jamb
+#: (:data:`EDGE_CELLS` cells of 5 cm).
+REVEAL_REACH_M = 0.1
+#: The reveal of a jamb is read inside the wall's depth, this far (m) from both its faces: a
+#: door's leaf standing open at its hinge stands in the doorway beside the reveal, from the face
+#: its hinge is on outwards, and reaches into the wall's depth by less than its thickness (4 cm)
+#: times the cosine of its angle; its edge then lies in the face's plane, a jamb to the raster
+#: (the opening measured a leaf's thickness narrow), while the reveal behind it is the jamb.
+REVEAL_INSET_M = 0.02
+#: A leaf standing open by 10-35 degrees puts a wedge of its faces into the slab beside its
+#: hinge's jamb, off the face's own plane: the slab's raster finds the doorway narrowed by up to
+#: this much (m; half the narrowest door, ``door_width_m``), and the reveal beyond the wedge is
+#: the jamb ...
+LEAF_WEDGE_M = 0.3
+#: ... which is a leaf when the slab's samples there lie on a plane (their median distance from
+#: the line fitted to them at most this, m: a 4 cm leaf's two faces, 2 cm either side of its
+#: middle, and the scan's noise) turned from the face by :data:`LEAF_MIN_TURN_DEG` or more, or
+#: stand off the face's plane (farther than this from it).
+LEAF_PLANE_M = 0.03
+#: A door leaf standing open turns from its wall by at least this angle (degrees); a leaf
+#: nearer to closed lies in the wall's plane and is part of the wall's face, or the door's.
+LEAF_MIN_TURN_DEG = 10.0
+
+
+def _reveal(
+    ev: WallEvidence, w: int, u: float, d_range: tuple[float, float], low: float, high: float, toward: float = 0.0, reach: float = REVEAL_REACH_M
+) -> tuple[float, float]:
+    """The reveal at a jamb ``u`` along face ``w``: ``(share, position)``, the share of the rows
+    (of ``opening_cell_m``) from ``low`` to ``high`` holding a face across the wall's depth (facing
+    along the wall, in ``d_range`` across it, within ``reach`` of ``u``) and the
+    area-weighted median position of those faces along the wall (``nan`` without any). With
+    ``toward`` (+1 or -1) only the faces facing that way along the tangent count: those facing
+    into the opening."""
+    walls, cell = ev.walls, ev.params.opening_cell_m
+    n3 = np.array([walls.normal[w][0], 0.0, walls.normal[w][1]])
+    t3 = np.array([walls.tangent[w][0], 0.0, walls.tangent[w][1]])
+    off = float(walls.offset[w])
+    nrow = max(1, int(np.ceil((high - low) / cell)))
+    faces = ev.near(ev.across(w), n3, t3, off, d_range, (u - reach, u + reach), (low, high))
+    if toward:
+        faces = faces[ev.normals[faces] @ t3 * toward > 0]
+    tri = ev.tri[faces]
+    d, y = tri @ n3 - off, tri[:, :, 1]
+    cu = ev.centroids[faces] @ t3
+    ok = (_max3(d) >= d_range[0]) & (_min3(d) <= d_range[1]) & (np.abs(cu - u) <= reach)
+    ok &= (_max3(y) >= low) & (_min3(y) <= high)
+    if not ok.any():
+        return 0.0, float("nan")
+    a = np.clip(np.floor((_min3(y[ok]) - low) / cell).astype(np.int64), 0, nrow)
+    b = np.clip(np.ceil((_max3(y[ok]) - low) / cell).astype(np.int64), 0, nrow)
+    diff = np.zeros(nrow + 1, np.int64)
+    np.add.at(diff, a, 1)
+    np.add.at(diff, b, -1)
+    share = float(np.mean(np.cumsum(diff)[:nrow] > 0))
+    order = np.argsort(cu[ok], kind="stable")
+    weight = np.cumsum(ev.mesh.face_areas[faces[ok]][order])
+    return share, float(cu[ok][order][np.searchsorted(weight, 0.5 * weight[-1])])
+
+
+def _revealed(ev: WallEvidence, w: int, c: Candidate, d_range: tuple[float, float], low: float, high: float) -> bool:
+    """Whether both jambs of door ``c`` in face ``w`` show a reveal in the slab ``d_range`` over
+    :data:`REVEAL_SHARE` of the heights from ``low`` to ``high`` (see :data:`REVEAL_SHARE`)."""
+    return all(_reveal(ev, w, u, d_range, low, high)[0] >= REVEAL_SHARE for u in (c.u_min, c.u_max))
+
+
+def _same_jambs(a: Candidate, b: Candidate, tol: float) -> bool:
+    """Whether two openings of one face have their jambs within ``tol`` (m) of each other."""
+    return abs(a.u_min - b.u_min) <= tol and abs(a.u_max - b.u_max) <= tol
 
 
 def _open_in_slab(grid: np.ndarray, rows: slice, lo: float, cell: float, c: Candidate) -> bool:
@@ -666,6 +826,8 @@ class _Frame:
     wall: int
     left_corner: bool
     right_corner: bool
+    #: moves a door's jambs out to the reveals beyond them, where the wall's depth is known
+    to_reveals: Callable[[float, float], tuple[float, float]] | None = None
 
 
 def _refine(f: _Frame, left: float, right: float, low: float, high: float) -> tuple[float, float]:
@@ -772,6 +934,8 @@ def _doors(f: _Frame, walls: FlatWalls, floor_cols: np.ndarray, params: PlanPara
         else:
             continue
         left, right = _refine(f, left, right, f.floor + params.opening_margin_m, min(top, f.floor + params.door_height_m))
+        if f.to_reveals is not None:
+            left, right = f.to_reveals(left, right)
         if not params.door_width_m[0] <= right - left <= params.door_width_m[1]:
             continue
         if (f.left_corner and lj[0] < EDGE_CELLS) or (f.right_corner and rj[0] >= ncol - EDGE_CELLS):
@@ -786,17 +950,25 @@ def _doors(f: _Frame, walls: FlatWalls, floor_cols: np.ndarray, params: PlanPara
     return out
 
 
+#: Cells (of ``opening_cell_m``) a jamb of a doorway whose head was not scanned may stop below
+#: the wall's scanned top beside it (:func:`_jambs_reach_wall_top`): the scan's top steps by up
+#: to 15 cm from one piece of wall to the next (the hard synthetic scans' pieces stop at 1.4-2.0 m
+#: at random; a door's jamb piece 15 cm lower than the next piece is common there), while the
+#: jambs of a hole in the scan stop 40 cm and more below the wall around it.
+JAMB_TOP_CELLS = 4
+
+
 def _jambs_reach_wall_top(f: _Frame, col_top: FloatArray, left: int, right: int) -> bool:
     """Whether the wall at each jamb (the highest of the columns ``left`` and ``right`` and the
     :data:`EDGE_CELLS` next to them in the wall, for the rounded or decimated corner of a jamb)
-    rises within :data:`EDGE_CELLS` cells of the top of the wall scanned beside it (the median
+    rises within :data:`JAMB_TOP_CELLS` cells of the top of the wall scanned beside it (the median
     top of the columns within :data:`HEAD_UNSEEN_CONTEXT_M` on its side, the columns a corner
     closes left out: a ragged top scatters by a few cells): the gap's edges are the wall's full
     scanned height, not a hole lower in it."""
     k = max(1, int(np.ceil(HEAD_UNSEEN_CONTEXT_M / f.cell)))
     first = EDGE_CELLS if f.left_corner else 0
     stop = len(col_top) - EDGE_CELLS if f.right_corner else len(col_top)
-    tol = EDGE_CELLS * f.cell
+    tol = JAMB_TOP_CELLS * f.cell
 
     def tops(a: int, b: int) -> FloatArray:
         return col_top[max(a, first) : min(b, stop)]
@@ -865,6 +1037,46 @@ def _headless_windows(f: _Frame, walls: FlatWalls, params: PlanParams) -> list[C
     grid[top_row + 1 :] = True  # the unscanned band: wall, as far as a window is concerned
     out = []
     for c in _window_regions(replace(f, grid=grid), walls, params, ~grid):
+        if c.top >= scanned_top - EDGE_CELLS * cell:  # up to where the scan stopped
+            out.append(replace(c, top=max(c.top, f.floor + WINDOW_HEAD_ASSUMED_M), how="head unseen"))
+    return out
+
+
+def _notch_windows(f: _Frame, walls: FlatWalls, params: PlanParams) -> list[Candidate]:
+    """Windows in a face scanned only up to heights below its ceiling that vary along it (the
+    scan's top steps from one piece of wall to the next, so that the face's median top of
+    :func:`_headless_windows` cuts through the pieces beside a window): each column's unscanned
+    space above the lower of the highest columns within the widest window on either side (the
+    jambs' tops) is taken as wall, so that a window whose head stands in it shows as an empty
+    rectangle from its sill up to the lower jamb's top, framed by straight jambs and a sill
+    (:func:`_window_regions`). Its sill lies no higher than :data:`HEAD_UNSEEN_MIN_TOP_M` (a
+    piece of wall scanned lower than those beside it, higher up, is where the scan stopped), its
+    jambs rise above that and stop below the ceiling; its head is assumed
+    (:data:`WINDOW_HEAD_ASSUMED_M`)."""
+    g, cell, m = f.grid, f.cell, f.margin
+    nrow, ncol = g.shape
+    body = g[m : nrow - m]
+    col_u = f.lo + (np.arange(ncol) + 0.5) * cell
+    filled = body.any(axis=0)
+    if not (filled & (col_u >= walls.u_min[f.wall]) & (col_u <= walls.u_max[f.wall])).any():
+        return []
+    top_rows = np.where(filled, body.shape[0] - 1 - np.argmax(body[::-1], axis=0) + m, -1)  # the last row of wall
+    k = int(np.ceil(params.window_width_m[1] / cell))
+    # the highest column within k columns on each side of each column (itself included)
+    left = ndimage.maximum_filter1d(top_rows, size=k + 1, origin=k // 2, mode="nearest")
+    right = ndimage.maximum_filter1d(top_rows, size=k + 1, origin=-(k // 2) - (k % 2), mode="nearest")
+    cap = np.minimum(left, right)
+    grid = g.copy()
+    grid[np.arange(nrow)[:, None] > cap[None, :]] = True
+    out = []
+    for c in _window_regions(replace(f, grid=grid), walls, params, ~grid):
+        if c.bottom > f.floor + HEAD_UNSEEN_MIN_TOP_M:
+            continue
+        a = int(np.clip(np.floor((c.u_min - f.lo) / cell), 0, ncol - 1))
+        b = int(np.clip(np.ceil((c.u_max - f.lo) / cell), a + 1, ncol))
+        scanned_top = f.floor + (int(cap[a:b].min()) + 1) * cell  # the lower jamb's top
+        if scanned_top >= f.ceiling - params.opening_margin_m - EDGE_CELLS * cell or scanned_top - f.floor < HEAD_UNSEEN_MIN_TOP_M:
+            continue  # jambs scanned to the ceiling (the head would show), or no higher than the work surfaces
         if c.top >= scanned_top - EDGE_CELLS * cell:  # up to where the scan stopped
             out.append(replace(c, top=max(c.top, f.floor + WINDOW_HEAD_ASSUMED_M), how="head unseen"))
     return out

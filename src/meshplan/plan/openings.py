@@ -32,7 +32,7 @@ from ..geometry import FloatArray, IntArray, Mesh
 from ..orient import Orientation
 from ..walls import FlatWalls, PhysicalWall, WallParams, physical_walls
 from ..walls.flat import segment_distances
-from .doors import Candidate, WallEvidence, wall_candidates
+from .doors import EDGE_CELLS, LEAF_MIN_TURN_DEG, Candidate, WallEvidence, wall_candidates
 from .params import PlanParams
 
 #: Two finds on parallel faces are one opening when their intervals along the wall overlap by
@@ -167,11 +167,15 @@ def find_openings(
     if physical is None:
         wp = WallParams()
         physical = physical_walls(walls, wp.max_wall_thickness_m, wp.default_wall_thickness_m)
-    ev = WallEvidence(mesh, walls, params)
+    thickness = np.full(len(walls), np.nan)
+    for pw in physical:
+        thickness[list(pw.faces)] = pw.thickness
+    ev = WallEvidence(mesh, walls, params, thickness)
     found: list[Candidate] = []
     for w in range(len(walls)):
         story = orientation.stories[int(walls.story[w])]
         found.extend(wall_candidates(ev, w, story.floor, story.ceiling))
+    found = _without_leaf_windows(found, walls, params)
     if not found:
         return _empty()
     rows = _merge(found, walls, physical, params)
@@ -189,9 +193,6 @@ def find_openings(
     )
 
 
-#: A door leaf standing open turns from its wall by at least this angle (degrees); a leaf
-#: nearer to closed lies in the wall's plane and is part of the wall's face, or the door's.
-LEAF_MIN_TURN_DEG = 10.0
 #: A leaf's hinge lies this close (m) to the flat wall found on the leaf: the hinge stands on a
 #: jamb of the door, on either face of the wall, and that flat wall stops 5-15 cm short of it
 #: where the scan rounds the corner between leaf and frame.
@@ -257,6 +258,31 @@ def _along(walls: FlatWalls, src: int, dst: int, u: float) -> float:
     """``u`` along face ``src`` at its plane, as ``u`` along face ``dst``."""
     p = walls.offset[src] * walls.normal[src] + u * walls.tangent[src]
     return float(walls.tangent[dst] @ p)
+
+
+def _without_leaf_windows(found: list[Candidate], walls: FlatWalls, params: PlanParams) -> list[Candidate]:
+    """``found`` without the windows whose head was not scanned (:func:`meshplan.plan.doors._headless_windows`)
+    that stand between the jambs of a door found on a parallel face of the same wall: a leaf
+    closed flush with one face and scanned lower than the wall beside it leaves the band above it
+    empty there, a "window" on its sill, while the other face shows the doorway."""
+    tol = EDGE_CELLS * params.opening_cell_m
+    depth = params.opening_wall_depth_m + 2 * params.opening_slab_m
+    cos = np.cos(np.radians(PARALLEL_DEG))
+    doors = [c for c in found if c.kind == "door"]
+
+    def explained(c: Candidate) -> bool:
+        for d in doors:
+            if walls.story[d.wall] != walls.story[c.wall] or abs(float(walls.normal[d.wall] @ walls.normal[c.wall])) < cos:
+                continue
+            mid = walls.offset[c.wall] * walls.normal[c.wall] + 0.5 * (c.u_min + c.u_max) * walls.tangent[c.wall]
+            if abs(float(walls.normal[d.wall] @ mid) - walls.offset[d.wall]) > depth:
+                continue
+            lo, hi = sorted((_along(walls, c.wall, d.wall, c.u_min), _along(walls, c.wall, d.wall, c.u_max)))
+            if abs(lo - d.u_min) <= tol and abs(hi - d.u_max) <= tol:
+                return True
+        return False
+
+    return [c for c in found if not (c.kind == "window" and c.how == "head unseen" and explained(c))]
 
 
 def _merge(found: list[Candidate], walls: FlatWalls, physical: tuple[PhysicalWall, ...], params: PlanParams) -> list[tuple]:
