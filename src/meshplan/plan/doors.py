@@ -281,9 +281,10 @@ class WallEvidence:
             self._sorted(key, w, v[np.abs(self._vertical_normals @ n3) >= self.cos])
         return self.slab_faces(np.zeros(0, np.int64), key, w, d_range, u_range)
 
-    def across(self, w: int) -> IntArray:
+    def across(self, w: int, d_range: tuple[float, float], u_range: tuple[float, float]) -> IntArray:
         """The vertical faces facing along face ``w``'s tangent (either way, within
-        ``opening_facing_deg``): jambs, reveals and returns across its wall's depth."""
+        ``opening_facing_deg``), jambs, reveals and returns across its wall's depth, that may
+        reach the box ``d_range`` across and ``u_range`` along it."""
         key = ("across", int(self.walls.direction[w]))
         if key not in self._cache:
             n3 = self._direction_normal(w)
@@ -291,8 +292,8 @@ class WallEvidence:
             v = self.vertical
             if self._vertical_normals is None:
                 self._vertical_normals = self.normals[v]
-            self._cache[key] = (np.zeros(0), v[np.abs(self._vertical_normals @ t3) >= self.cos], np.zeros(0, np.int64))
-        return self._cache[key][1]
+            self._sorted(key, w, v[np.abs(self._vertical_normals @ t3) >= self.cos])
+        return self.slab_faces(np.zeros(0, np.int64), key, w, d_range, u_range)
 
     def floor_faces(self, w: int, floor: float, d_range: tuple[float, float], u_range: tuple[float, float]) -> IntArray:
         """The floor faces at height ``floor`` that may reach the box ``d_range`` across and
@@ -512,9 +513,7 @@ def _gaps(ev: WallEvidence, w: int, floor: float, ceiling: float) -> list[Candid
     face_raw = raster(at, near, -LEAF_SET_BACK_M)
     band = (floor + params.opening_margin_m, floor + HEAD_UNSEEN_MIN_TOP_M)
     band_rows = slice(margin, max(margin + 1, int(np.floor(HEAD_UNSEEN_MIN_TOP_M / cell))))
-    face_plane = raster(at, LEAF_PLANE_M, -LEAF_PLANE_M)
-    pts_u, pts_d = pts @ t3, pts @ n3 - off
-    in_band = (pts[:, 1] >= band[0]) & (pts[:, 1] <= band[1]) & (pts_d >= far) & (pts_d <= near)
+    lazy: dict[str, np.ndarray] = {}  # what leaf_between reads, made for the few faces that ask
 
     def leaf_between(a: float, b: float) -> bool:
         """Whether what the slab holds between ``a`` and ``b`` along the face (in the band of
@@ -522,11 +521,16 @@ def _gaps(ev: WallEvidence, w: int, floor: float, ceiling: float) -> list[Candid
         of it in at most a quarter of the cells, ``opening_edge_straightness``) or is a leaf
         standing open: a plane turned from the face by :data:`LEAF_MIN_TURN_DEG` or more (depth
         growing along the face), the samples' median distance from it within :data:`LEAF_PLANE_M`."""
+        if not lazy:
+            lazy["face_plane"] = raster(at, LEAF_PLANE_M, -LEAF_PLANE_M)
+            lazy["u"], lazy["d"] = pts @ t3, pts @ n3 - off
+            lazy["in_band"] = (pts[:, 1] >= band[0]) & (pts[:, 1] <= band[1]) & (lazy["d"] >= far) & (lazy["d"] <= near)
+        pts_u, pts_d = lazy["u"], lazy["d"]
         c0 = int(np.clip(np.floor((min(a, b) - lo) / cell) + 1, 0, ncol))
         c1 = int(np.clip(np.floor((max(a, b) - lo) / cell), 0, ncol))
-        if c1 <= c0 or float(face_plane[band_rows, c0:c1].mean()) <= 1.0 - params.opening_edge_straightness:
+        if c1 <= c0 or float(lazy["face_plane"][band_rows, c0:c1].mean()) <= 1.0 - params.opening_edge_straightness:
             return True  # the face's own plane (almost) empty: what the slab holds stands off it
-        sel = in_band & (pts_u > min(a, b)) & (pts_u < max(a, b))
+        sel = lazy["in_band"] & (pts_u > min(a, b)) & (pts_u < max(a, b))
         if np.count_nonzero(sel) < 3:
             return False
         u, d = pts_u[sel], pts_d[sel]
@@ -663,7 +667,8 @@ def _reveal(
     t3 = np.array([walls.tangent[w][0], 0.0, walls.tangent[w][1]])
     off = float(walls.offset[w])
     nrow = max(1, int(np.ceil((high - low) / cell)))
-    faces = ev.near(ev.across(w), n3, t3, off, d_range, (u - reach, u + reach), (low, high))
+    box = (u - reach, u + reach)
+    faces = ev.near(ev.across(w, d_range, box), n3, t3, off, d_range, box, (low, high))
     if toward:
         faces = faces[ev.normals[faces] @ t3 * toward > 0]
     tri = ev.tri[faces]
