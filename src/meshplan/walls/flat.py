@@ -14,7 +14,11 @@ A run must be long enough and come near the floor. The boxes of parametric model
 a wall (their furniture, :mod:`~meshplan.walls.solids`) are no evidence; pieces standing out
 of a longer wall (pilasters), pillars with the ceiling scanned all round them, free-standing
 panels and short fragments connected to no wall with their tops lost below door height are
-dropped (:func:`_pilasters`, :func:`_free_standing`). Its plane faces the wall direction and
+dropped (:func:`_pilasters`, :func:`_free_standing`), and so are the fronts and sides of cupboards
+and wardrobes against a wall (:func:`_pilasters`, :func:`_box_sides`) and the outer faces of a
+parametric model's exterior walls (:func:`_outer_faces`); a segment is cut where a wall crosses it
+(:func:`_split_at_crossings`), and a story whose walls stop short of its scanned ceiling is judged
+as one without a ceiling (:func:`_walls_short_of`). Its plane faces the wall direction and
 passes through the area-weighted median of the centroids across the wall; its rectangle spans
 its triangles along the wall and in height. Faces larger than half a box are split first, so
 that the centroids of parametric models (two triangles a wall) sample their surfaces. Coplanar rectangles of one direction
@@ -946,6 +950,9 @@ FRONT_SEARCH_M = (0.15, 0.6)
 #: cuts its front and sides at one height.
 FRONT_TOP_M = 0.2
 
+#: Share of the search beside a side's free end (:func:`_front_at`) that the front must fill.
+SIDE_COVER_FRONT = 0.75
+
 
 def _front_at(raster: StoryRaster, tip: FloatArray, tangent: FloatArray, top: float) -> bool:
     """Whether a surface as high as ``top`` (within :data:`FRONT_TOP_M`) was scanned along most
@@ -960,10 +967,6 @@ def _front_at(raster: StoryRaster, tip: FloatArray, tangent: FloatArray, top: fl
         if float(np.mean(tops >= top - FRONT_TOP_M)) >= SIDE_COVER_FRONT:
             return True
     return False
-
-
-#: Share of the search beside a side's free end (:func:`_front_at`) that the front must fill.
-SIDE_COVER_FRONT = 0.75
 
 
 def find_flat_walls(mesh: Mesh, orientation: Orientation, params: WallParams | None = None) -> FlatWalls:
