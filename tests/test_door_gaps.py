@@ -369,3 +369,92 @@ def test_a_window_between_pieces_of_wall_scanned_to_different_heights(sill_m: fl
     assert w.kind == "window" and w.how == "head unseen"
     assert (w.u_min, w.u_max, w.bottom) == pytest.approx((1.0, 2.2, sill_m), abs=CELL)
     assert w.top == pytest.approx(WINDOW_HEAD_ASSUMED_M)
+
+
+# ------------------------------------------------ windows beside lower piers, corners; stacked finds
+
+
+def _scanned_to(tops: list[tuple[float, float, float]], length_m: float = 6.0, right_corner: bool = False) -> _Frame:
+    """A face ``length_m`` long scanned from the floor up to a height that changes along it:
+    ``(from_m, to_m, top_m)`` pieces (top 0: nothing scanned); nothing above, as in a scan whose
+    user never looked up. A corner at its right end closes its last columns (as :func:`_gaps`
+    does)."""
+    from meshplan.plan.doors import EDGE_CELLS
+
+    f = _frame(CEILING, length_m=length_m)
+    nrow, ncol = f.grid.shape
+    top = np.zeros(ncol)
+    for a, b, t in tops:
+        top[int(round(a / CELL)) : int(round(b / CELL))] = t
+    rows = np.arange(nrow)[:, None]
+    grid = rows < np.round(top / CELL)[None, :]
+    grid[: f.margin] = True
+    grid[nrow - f.margin :] = True
+    if right_corner:
+        grid[:, ncol - EDGE_CELLS :] = True
+    return _Frame(grid, f.lo, f.floor, f.ceiling, f.cell, f.margin, np.zeros(0), np.zeros(0), 0, False, right_corner)
+
+
+#: Two windows from 0.9 m sills into the unscanned band, 1.0-2.0 m and 2.3-3.3 m along a face
+#: scanned to 1.6 m, whose pier between them and pieces beside them were scanned 10 cm lower.
+_TWO_WINDOWS = [(0.0, 0.6, 1.6), (0.6, 1.0, 1.5), (1.0, 2.0, 0.9), (2.0, 2.3, 1.5), (2.3, 3.3, 0.9), (3.3, 3.7, 1.5), (3.7, 6.0, 1.6)]
+
+
+@pytest.mark.parametrize("search", ["_headless_windows", "_notch_windows"])
+def test_two_windows_over_a_pier_scanned_a_little_lower_are_two_windows(search: str) -> None:
+    """The strips of empty cells over the pier and the pieces scanned 10 cm lower joined both
+    windows' regions into one ragged region, no window (hard preset, seed 5's kitchen)."""
+    import meshplan.plan.doors as doors
+
+    frame = _scanned_to(_TWO_WINDOWS)
+    walls = SimpleNamespace(u_min=np.array([0.0]), u_max=np.array([6.0]))
+    found = sorted(getattr(doors, search)(frame, walls, PlanParams()), key=lambda c: c.u_min)
+    assert [v for c in found for v in (c.u_min, c.u_max, c.bottom)] == pytest.approx([1.0, 2.0, 0.9, 2.3, 3.3, 0.9], abs=CELL)
+    assert all(c.kind == "window" and c.how == "head unseen" for c in found)
+
+
+def test_a_corner_beside_windows_whose_heads_were_not_scanned_is_no_jamb_top() -> None:
+    """Two windows within a window's width of a corner, in a face scanned to 1.55 m whose piece
+    beside a door 2 m to their left was scanned to 1.9 m: the columns the corner closes are the
+    perpendicular wall, not a jamb scanned to the raster's top, so that the notches are capped at
+    1.55 m (the jambs' tops) and not at 1.9 m, where they joined over the pier (hard preset,
+    seed 4)."""
+    from meshplan.plan.doors import _notch_windows
+
+    tops = [(0.0, 1.0, 1.9), (1.0, 1.8, 0.0), (1.8, 2.0, 1.9), (2.0, 2.7, 1.55), (2.7, 3.7, 0.85), (3.7, 4.0, 1.5), (4.0, 5.4, 1.0), (5.4, 6.0, 1.55)]
+    frame = _scanned_to(tops, right_corner=True)
+    walls = SimpleNamespace(u_min=np.array([0.0]), u_max=np.array([6.0]))
+    found = sorted((c for c in _notch_windows(frame, walls, PlanParams()) if c.kind == "window"), key=lambda c: c.u_min)
+    assert [v for c in found for v in (c.u_min, c.u_max, c.bottom)] == pytest.approx([2.7, 3.7, 0.85, 4.0, 5.4, 1.0], abs=CELL)
+
+
+@pytest.mark.parametrize("face_end_m, found", [(6.0, True), (2.2, False)])
+def test_a_window_lies_over_its_face(face_end_m: float, found: bool) -> None:
+    """An empty rectangle framed all round, 2.0-3.0 m along, from a 0.9 m sill to a 2.0 m head:
+    a window of a face that runs past it; beside the end of a face 2.2 m long (the space between
+    a bookcase's shelves, seen past a short furniture face) it is none."""
+    from meshplan.plan.doors import _windows
+
+    f = _frame(CEILING, length_m=6.0)
+    grid = np.ones_like(f.grid)
+    grid[int(round(0.9 / CELL)) : int(round(2.0 / CELL)), int(round(2.0 / CELL)) : int(round(3.0 / CELL))] = False
+    frame = _Frame(grid, f.lo, f.floor, f.ceiling, f.cell, f.margin, np.zeros(0), np.zeros(0), 0, False, False)
+    walls = SimpleNamespace(u_min=np.array([0.0]), u_max=np.array([face_end_m]))
+    windows = _windows(frame, walls, PlanParams())
+    assert len(windows) == (1 if found else 0)
+
+
+def test_finds_one_above_the_other_are_two_openings_not_one() -> None:
+    """Two windows found on one face over the same span, 0.48-0.84 m and 0.87-1.24 m up: not
+    one window, whose merged sill (the higher bottom) stood above its head (the lower top)."""
+    from meshplan.plan.doors import Candidate
+    from meshplan.plan.openings import _merge
+
+    walls = _walls_in_line((0.0, 3.0))
+    low = Candidate("window", 0, 1.0, 2.0, 0.48, 0.84, "gap")
+    high = Candidate("window", 0, 1.0, 2.0, 0.87, 1.24, "gap")
+    rows = _merge([low, high], walls, (), PlanParams())
+    assert sorted((r[4], r[5]) for r in rows) == [(0.48, 0.84), (0.87, 1.24)]
+    same = Candidate("window", 0, 1.05, 2.0, 0.5, 0.84, "gap")
+    (row,) = _merge([low, same], walls, (), PlanParams())
+    assert row[5] > row[4]

@@ -1018,6 +1018,13 @@ def _windows(f: _Frame, walls: FlatWalls, params: PlanParams) -> list[Candidate]
 #: Head given to a window whose head was not scanned (m above its floor): the line of the door
 #: heads, where most window heads stand (2.0-2.2 m).
 WINDOW_HEAD_ASSUMED_M = 2.1
+#: Share of a window's width that lies over its face's extent: the wall under a sill and over a
+#: head is the face's own plane, merged into one face with the wall beside the window, so that
+#: a window lies within its face; the reach beyond a face's ends is for doors, which split the
+#: wall to the floor (a face ends at each of their jambs). The empty space between the shelves
+#: of a bookcase or beside the end of a short furniture face is no window (hard preset, seed 4:
+#: a 0.4 m face holding two stacked "windows" 1 m wide, 0.4 m of each over it).
+WINDOW_IN_FACE_SHARE = 0.5
 
 
 def _headless_windows(f: _Frame, walls: FlatWalls, params: PlanParams) -> list[Candidate]:
@@ -1041,7 +1048,7 @@ def _headless_windows(f: _Frame, walls: FlatWalls, params: PlanParams) -> list[C
     grid = g.copy()
     grid[top_row + 1 :] = True  # the unscanned band: wall, as far as a window is concerned
     out = []
-    for c in _window_regions(replace(f, grid=grid), walls, params, ~grid):
+    for c in _window_regions(replace(f, grid=grid), walls, params, _tall_runs(~grid, f.cell, params)):
         if c.top >= scanned_top - EDGE_CELLS * cell:  # up to where the scan stopped
             out.append(replace(c, top=max(c.top, f.floor + WINDOW_HEAD_ASSUMED_M), how="head unseen"))
     return out
@@ -1066,6 +1073,14 @@ def _notch_windows(f: _Frame, walls: FlatWalls, params: PlanParams) -> list[Cand
     if not (filled & (col_u >= walls.u_min[f.wall]) & (col_u <= walls.u_max[f.wall])).any():
         return []
     top_rows = np.where(filled, body.shape[0] - 1 - np.argmax(body[::-1], axis=0) + m, -1)  # the last row of wall
+    # the columns a corner closes (:func:`_gaps`) stand for the perpendicular wall, not for how
+    # high this one was scanned: taken as jambs' tops, they raised the cap of every column
+    # within a window's width of the corner to the raster's top (hard preset, seed 4: two
+    # windows next to a corner joined over their pier into one region 1 m tall)
+    if f.left_corner:
+        top_rows[:EDGE_CELLS] = -1
+    if f.right_corner:
+        top_rows[ncol - EDGE_CELLS :] = -1
     k = int(np.ceil(params.window_width_m[1] / cell))
     # the highest column within k columns on each side of each column (itself included)
     left = ndimage.maximum_filter1d(top_rows, size=k + 1, origin=k // 2, mode="nearest")
@@ -1074,7 +1089,7 @@ def _notch_windows(f: _Frame, walls: FlatWalls, params: PlanParams) -> list[Cand
     grid = g.copy()
     grid[np.arange(nrow)[:, None] > cap[None, :]] = True
     out = []
-    for c in _window_regions(replace(f, grid=grid), walls, params, ~grid):
+    for c in _window_regions(replace(f, grid=grid), walls, params, _tall_runs(~grid, f.cell, params)):
         if c.bottom > f.floor + HEAD_UNSEEN_MIN_TOP_M:
             continue
         a = int(np.clip(np.floor((c.u_min - f.lo) / cell), 0, ncol - 1))
@@ -1085,6 +1100,25 @@ def _notch_windows(f: _Frame, walls: FlatWalls, params: PlanParams) -> list[Cand
         if c.top >= scanned_top - EDGE_CELLS * cell:  # up to where the scan stopped
             out.append(replace(c, top=max(c.top, f.floor + WINDOW_HEAD_ASSUMED_M), how="head unseen"))
     return out
+
+
+def _tall_runs(empty: np.ndarray, cell: float, params: PlanParams) -> np.ndarray:
+    """The cells of ``empty`` in an upright run of empty cells at least ``window_height_m``
+    tall (a binary opening by an upright line).
+
+    Where the head of a window was not scanned, the space above the wall's scanned top is taken
+    as wall up to the same height everywhere (:func:`_headless_windows`) or up to the jambs'
+    tops (:func:`_notch_windows`), while pieces of wall beside a window, or the pier between two
+    windows, were scanned to 5-15 cm lower: the strips of empty cells over them joined the
+    windows' regions to each other and to the wall's top, so that none was a rectangle (hard
+    preset, seed 5: two kitchen windows and their pier). A window is empty over its whole
+    height in each of its columns, at least ``window_height_m`` (shorter regions are refused
+    anyway), so dropping the shorter runs loses no window's cell.
+    """
+    rows = int(np.ceil(params.window_height_m / cell - 1e-9))
+    if rows <= 1 or not empty.any():
+        return empty
+    return ndimage.binary_opening(empty, structure=np.ones((rows, 1), dtype=bool))
 
 
 def _largest_rectangle(box: np.ndarray) -> tuple[int, int, int, int]:
@@ -1143,8 +1177,8 @@ def _window_regions(f: _Frame, walls: FlatWalls, params: PlanParams, empty: np.n
             continue
         left, right = lo + cs.start * cell, lo + cs.stop * cell
         low, high = floor + rs.start * cell, floor + rs.stop * cell
-        if right < walls.u_min[w] - tol or left > walls.u_max[w] + tol:
-            continue  # wholly beyond this face: the face there belongs to another wall's search
+        if min(right, walls.u_max[w] + tol) - max(left, walls.u_min[w] - tol) < WINDOW_IN_FACE_SHARE * (right - left):
+            continue  # (mostly) beyond this face: no wall of it under a sill there
         width = right - left
         touches_floor = rs.start <= margin
         reaches_top = rs.stop >= nrow - margin

@@ -289,7 +289,8 @@ def _merge(found: list[Candidate], walls: FlatWalls, physical: tuple[PhysicalWal
     """One row ``(kind, wall, u_min, u_max, bottom, top, cuts, closed)`` per physical opening.
 
     Finds of one kind on parallel faces of a story whose planes lie within a wall's depth and
-    whose intervals overlap are the same opening (union-find over the pairs).
+    whose intervals overlap, along the wall and in height, are the same opening (union-find
+    over the pairs).
     """
     n = len(found)
     parent = list(range(n))
@@ -315,7 +316,10 @@ def _merge(found: list[Candidate], walls: FlatWalls, physical: tuple[PhysicalWal
                 continue
             lo_b, hi_b = sorted((_along(walls, b.wall, a.wall, b.u_min), _along(walls, b.wall, a.wall, b.u_max)))
             overlap = min(a.u_max, hi_b) - max(a.u_min, lo_b)
-            if overlap >= SAME_OPENING_OVERLAP * min(a.u_max - a.u_min, hi_b - lo_b):
+            # and over each other's heights: two finds one above the other (the spaces between
+            # shelves) are not one opening, whose merged sill would stand above its head
+            rise = min(a.top, b.top) - max(a.bottom, b.bottom)
+            if overlap >= SAME_OPENING_OVERLAP * min(a.u_max - a.u_min, hi_b - lo_b) and rise >= SAME_OPENING_OVERLAP * min(a.top - a.bottom, b.top - b.bottom):
                 parent[root(j)] = root(i)
     groups: dict[int, list[int]] = {}
     for i in range(n):
