@@ -458,3 +458,35 @@ def test_finds_one_above_the_other_are_two_openings_not_one() -> None:
     same = Candidate("window", 0, 1.05, 2.0, 0.5, 0.84, "gap")
     (row,) = _merge([low, same], walls, (), PlanParams())
     assert row[5] > row[4]
+
+
+def _depths(profile: np.ndarray, rows: int = 40) -> tuple[np.ndarray, np.ndarray]:
+    """``(depths, flat cells)`` of one sample per cell of a raster ``rows`` high whose columns
+    hold a surface at the depths ``profile`` (m in front of the face's fitted plane)."""
+    ncol = len(profile)
+    r, c = np.divmod(np.arange(rows * ncol), ncol)
+    return profile[c].astype(float), r * ncol + c
+
+
+@pytest.mark.parametrize("leaf_m, dip", [(0.8, True), (2.5, False)])
+def test_the_wall_beside_a_leaf_clustered_with_it_gives_the_face_its_plane(leaf_m: float, dip: bool) -> None:
+    """A face fitted through a closed leaf (depth 0) with the wall on both sides of it 7 cm in
+    front: the wall's front, the leaf's columns' reference, stands 7 cm in front across the
+    leaf, whose set-back the closed-door search then reads. A face all in one plane, or a dip
+    wider than any door (a wall of its own), gives none."""
+    from meshplan.plan.doors import LEAF_SET_BACK_M, _local_front
+
+    ncol = 120
+    profile = np.full(ncol, 0.07)
+    a, b = 30, 30 + int(round(leaf_m / CELL))
+    profile[a:b] = 0.0
+    rows = slice(3, 36)
+    on_face = np.ones(ncol, dtype=bool)
+    front = _local_front(_depths(profile), ncol, CELL, rows, on_face, -0.33, 0.08)
+    if not dip:
+        assert front is None
+        return
+    assert front is not None
+    assert front[a:b] == pytest.approx(0.07, abs=0.005)
+    assert np.all(front[a:b] - profile[a:b] >= LEAF_SET_BACK_M)
+    assert _local_front(_depths(np.zeros(ncol)), ncol, CELL, rows, on_face, -0.33, 0.08) is None

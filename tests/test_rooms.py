@@ -196,8 +196,13 @@ def test_the_hard_preset_meets_the_issue_bounds(computed, seed):
     assert rooms["found_fraction"] >= 0.95 and rooms["precision"] == 1.0, rooms
     assert rooms["median_abs_error_pct"] <= 0.5, rooms
     # seed 1 holds a doorway whose open leaf wedges into the wall's slab by its hinge (found in
-    # the face's own plane) and a leaf open by 6 degrees, nearly closed (missed): 6 of 7
-    assert doors["precision"] == 1.0 and doors["recall"] >= (0.85 if seed == 1 else 0.7), doors
+    # the face's own plane); seed 3 a closed leaf 7 cm back, clustered with the wall beside it
+    # into one face (found against the wall's front), and a leaf ajar at 28 degrees (missed)
+    assert doors["precision"] == 1.0 and doors["recall"] >= 0.85, doors
+    # windows whose heads were not scanned, beside piers scanned lower (seeds 1-3: 9/9, 5/6 with
+    # one in a piece of wall that was not scanned, 6/6)
+    windows = report["windows"]
+    assert windows["precision"] == 1.0 and windows["recall"] >= 0.8, windows
 
 
 @pytest.mark.parametrize("seed", [1, 2])
