@@ -197,8 +197,8 @@ def test_a_run_with_workers_writes_what_a_run_alone_writes(apartment, tmp_path):
     submitted: list = []
     real = export.submit_early
 
-    def spy(pool, oriented):
-        early = real(pool, oriented)
+    def spy(pool, oriented, upright=None):
+        early = real(pool, oriented, upright)
         submitted.append(early)
         return early
 
@@ -211,6 +211,9 @@ def test_a_run_with_workers_writes_what_a_run_alone_writes(apartment, tmp_path):
     assert all(f is not None for f in submitted[0].futures)
     early_names = {n for job, f in zip(submitted[0].jobs, submitted[0].futures) for n in f.result()}
     assert {"pen-and-ink-0.png", "pen-and-ink-0.svg", "pen-and-ink-0.pdf", "normals.png", "levels.png"} <= early_names
+    # the normals and levels went as soon as the scan was oriented, before the pen-and-ink
+    # slices were cut (submit_upright): first among the early drawings
+    assert [job[0].__name__ for job in submitted[0].jobs[:2]] == ["_normals_files", "_levels_files"]
     names = sorted(p.name for p in (tmp_path / "alone").iterdir())
     assert names == sorted(p.name for p in (tmp_path / "workers").iterdir())
     for name in names:

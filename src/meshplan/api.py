@@ -14,15 +14,19 @@ import time
 from contextlib import nullcontext
 from dataclasses import replace
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from .export import RenderPool, _processes, submit_early, write_results
-from .geometry import Annotations
+from .export import RenderPool, _processes, submit_early, submit_upright, submit_walls, write_results
+from .geometry import Annotations, Mesh
 from .io import check_output_dir, load_annotations, load_mesh
 from .options import RunOptions
 from .pipeline import compute
 from .plan.elements import load_room_edits
 from .result import Oriented, Progress, Result, _Timer
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .orient import Orientation
+    from .walls import FlatWalls
 
 log = logging.getLogger(__name__)
 
@@ -101,15 +105,30 @@ def run(
             explicit = params.get("units") is not None if "units" in params else None
             loaded = load_mesh(scan, options.input.units, options.input.max_faces, point_voxel_m=options.input.point_voxel_m, units_explicit=explicit)
             ann = load_annotations(annotations, loaded.stats.scale_to_m) if annotations is not None else Annotations()
-        early: list = []  # the drawings handed to the workers (if any) once the scan is oriented
+        # the drawings handed to the workers (if any): those of the orientation alone as soon as
+        # the scan is oriented (drawn while the pen-and-ink slices are cut), then the pen-and-ink
+        # plans, then the wall segments once the walls are final (drawn while the rooms are
+        # found): the worker is left no idle time before the drafting plans, the last drawing
+        handed: dict[str, Any] = {}  # "early": the EarlyDrawings so far; "oriented"
+
+        def draw_upright(orientation: Orientation, mesh: Mesh) -> None:
+            handed["early"] = submit_upright(pool, orientation, mesh, options.render)
 
         def draw_early(oriented: Oriented) -> None:
-            early.append(submit_early(pool, oriented))
+            handed["oriented"] = oriented
+            handed["early"] = submit_early(pool, oriented, handed.get("early"))
 
-        result = compute(loaded.mesh, loaded.stats, ann, options, timer, units_explicit=explicit, room_edits=edits, on_oriented=draw_early)
+        def draw_walls(walls: FlatWalls) -> None:
+            if "oriented" in handed:
+                handed["early"] = submit_walls(pool, handed["oriented"], walls, handed["early"])
+
+        result = compute(
+            loaded.mesh, loaded.stats, ann, options, timer, units_explicit=explicit, room_edits=edits,
+            on_oriented=draw_early, on_upright=draw_upright, on_walls=draw_walls,
+        )
         if loaded.warnings:  # the reader's (float32 precision) first, before the stages'
             result = replace(result, warnings=(*loaded.warnings, *result.warnings))
         if output is None:
             return replace(result, timings={**timer.timings, "total": time.perf_counter() - t0})
-        written = write_results(result, Path(output), force=force, timer=timer, started=t0, pool=pool, early=early[0] if early else None)
+        written = write_results(result, Path(output), force=force, timer=timer, started=t0, pool=pool, early=handed.get("early"))
     return replace(result, output_dir=written.output_dir, files=written.files, timings=written.timings)

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Callable
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -30,6 +31,10 @@ from .updown import up_by_doors as _up_by_doors
 from .updown import up_in_doubt as _up_in_doubt
 from .walls import find_flat_walls, physical_walls
 from .walls.physical import JOIN_REACH_M, join_walls
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .orient import Orientation
+    from .walls import FlatWalls
 
 log = logging.getLogger(__name__)
 
@@ -121,6 +126,8 @@ def compute(
     units_explicit: bool | None = None,
     room_edits: tuple[RoomEdit, ...] = (),
     on_oriented: Callable[[Oriented], None] | None = None,
+    on_upright: Callable[[Orientation, Mesh], None] | None = None,
+    on_walls: Callable[[FlatWalls], None] | None = None,
 ) -> Result:
     """Run every computing stage on an already loaded mesh (input coordinates, metres).
 
@@ -132,13 +139,17 @@ def compute(
     ``on_oriented`` is called once the scan is oriented and its pen-and-ink plans are cut, with
     what the later stages do not change (:class:`~meshplan.result.Oriented`): the run API hands
     those drawings to its workers then, so that they are drawn while the walls and rooms are
-    computed.
+    computed. ``on_upright`` is called before, as soon as the scan is oriented, with the
+    orientation and the plan mesh (the run hands its workers the drawings of the orientation
+    alone, the normals and levels, while the pen-and-ink slices are cut), and ``on_walls`` with
+    the flat walls once they are final (the open doors' leaves taken out), before the rooms are
+    found (the run has its workers draw the wall segments meanwhile).
 
     The stages run with :data:`meshplan.geometry.BLAS_THREADS` BLAS thread: their products are
     thin, and the drawing workers run beside them on the other cores.
     """
     with few_blas_threads():
-        return _compute(mesh, stats, annotations, options, timer, units_explicit, room_edits, on_oriented)
+        return _compute(mesh, stats, annotations, options, timer, units_explicit, room_edits, on_oriented, on_upright, on_walls)
 
 
 def _compute(
@@ -150,6 +161,8 @@ def _compute(
     units_explicit: bool | None,
     room_edits: tuple[RoomEdit, ...],
     on_oriented: Callable[[Oriented], None] | None,
+    on_upright: Callable[[Orientation, Mesh], None] | None = None,
+    on_walls: Callable[[FlatWalls], None] | None = None,
 ) -> Result:
     """:func:`compute` itself, under its BLAS thread limit."""
     from .plausibility import orient_plausibly
@@ -175,6 +188,8 @@ def _compute(
         # the run's peak, which the drawing stage reaches
         mesh.release_derived()
     with timer.stage("slice_draw"):  # its first part: what needs the orientation alone
+        if on_upright is not None:
+            on_upright(orientation, plan_mesh)
         oriented = _oriented(stats, options, orientation, plan_mesh, plan_annotations)
         if on_oriented is not None:
             on_oriented(oriented)
@@ -197,6 +212,8 @@ def _compute(
             walls, renumbered = walls.without(leaves)
             openings = openings.reindexed(renumbered)
             physical = physical_walls(walls, options.walls.max_wall_thickness_m, options.walls.default_wall_thickness_m)
+        if on_walls is not None:
+            on_walls(walls)
         rooms = find_rooms(plan_mesh, orientation, walls, options.plan, options.orient.slab_tolerance_m)
         # building elements: walls meeting at their centre lines, rooms numbered and named,
         # what each wall and opening joins, types and confidences

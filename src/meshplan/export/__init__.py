@@ -32,9 +32,13 @@ from .planjson import dumps, plan_document, plan_schema
 from .report import report_html, report_page
 
 if TYPE_CHECKING:  # pragma: no cover
+    from ..geometry import Mesh
+    from ..orient import Orientation
     from ..plan import PenAndInkPlan
+    from ..render.params import RenderParams
     from ..render.sheet import Sheet
     from ..result import Result, _Timer
+    from ..walls import FlatWalls
 
 log = logging.getLogger(__name__)
 
@@ -47,6 +51,8 @@ __all__ = [
     "plan_schema",
     "render_files",
     "submit_early",
+    "submit_upright",
+    "submit_walls",
     "write_results",
 ]
 
@@ -117,21 +123,27 @@ def _model_jobs(result: Result) -> list[tuple]:
 
 
 def _early_jobs(oriented: Oriented) -> list[tuple]:
-    """``(function, *arguments)`` of the drawings the oriented scan alone decides (each story's
-    pen-and-ink plan, the normals, the levels), slowest first: the run submits them before its
-    walls and rooms exist (:func:`submit_early`)."""
-    o, mesh, params = oriented.orientation, oriented.mesh, oriented.options.render
+    """``(function, *arguments)`` of the drawings the oriented scan alone decides: each story's
+    pen-and-ink plan (slowest first), then those of :func:`_upright_jobs`."""
+    o, params = oriented.orientation, oriented.options.render
     n = len(o.stories)
     scan, north = _title(oriented)
     jobs: list[tuple] = [
         (_pen_files, _drawn_slices(pen), ann, _sheet(oriented, story.index), params, n, ("png", "svg", "pdf"), scan, north)
         for story, pen, ann in zip(o.stories, oriented.pen_and_ink, oriented.story_annotations, strict=True)
     ]
+    return jobs + _upright_jobs(o, oriented.mesh, params)
+
+
+def _upright_jobs(orientation: Orientation, mesh: Mesh, params: RenderParams) -> list[tuple]:
+    """``(function, *arguments)`` of the drawings the orientation alone decides (the normals,
+    the levels), before the pen-and-ink plans are cut: the run submits them as soon as the scan
+    is oriented (:func:`submit_upright`), so that its worker draws them while the slices are
+    computed."""
     # the figures read the orientation's levels, stories and wall directions, not its per-face
     # arrays (2.7 MB of the 300k-face apartment's, pickled to the worker for each figure)
-    light = replace(o, face_story=o.face_story[:0], flipped=o.flipped[:0])
-    jobs += [(_normals_files, mesh.face_normals, mesh.face_areas, light), (_levels_files, light, params)]
-    return jobs
+    light = replace(orientation, face_story=orientation.face_story[:0], flipped=orientation.flipped[:0])
+    return [(_normals_files, mesh.face_normals, mesh.face_areas, light), (_levels_files, light, params)]
 
 
 def _drawn_slices(pen: PenAndInkPlan) -> PenAndInkPlan:
@@ -159,11 +171,20 @@ def _sheet(oriented: Oriented | Result, story: int) -> Sheet:
     return make_sheet(mesh.face_centroids[o.face_story == story][:, [0, 2]], oriented.options.render)
 
 
-def _jobs(result: Result, workers: int = 2) -> tuple[list[tuple], list[tuple]]:
+def _segments_jobs(oriented: Oriented | Result, walls: FlatWalls) -> list[tuple]:
+    """``(function, *arguments)`` of each story's wall segments figure: the flat walls alone
+    decide it, so the run submits it once they are final, before the rooms (:func:`submit_walls`)."""
+    params, n = oriented.options.render, len(oriented.orientation.stories)
+    centroids = oriented.mesh.face_centroids
+    return [(_segments_files, centroids, walls, s.index, _sheet(oriented, s.index), params, n) for s in oriented.orientation.stories]
+
+
+def _jobs(result: Result, workers: int = 2, segments: bool = True) -> tuple[list[tuple], list[tuple]]:
     """``(function, *arguments)`` of the drawings that need the walls and rooms (the drafting
-    plans, the wall segments), slowest first, and of the DXF files. The jobs are the same for
-    any number of ``workers`` (kept for the callers: the drafting plans were split between two
-    workers before each figure was drawn once for its files)."""
+    plans, and the wall segments unless ``segments`` is false: :func:`submit_walls` handed them
+    over), slowest first, and of the DXF files. The jobs are the same for any number of
+    ``workers`` (kept for the callers: the drafting plans were split between two workers before
+    each figure was drawn once for its files)."""
     params = result.options.render
     n = len(result.stories)
     jobs: list[tuple] = []
@@ -177,7 +198,8 @@ def _jobs(result: Result, workers: int = 2) -> tuple[list[tuple], list[tuple]]:
         # three files (render.vector), so that two workers splitting its formats would each
         # build and draw it (before, two workers drew its raster and vector files at once)
         jobs.append((_drafting_files, sp.drafting, sp.annotations, sheet, params, n, symbols, ("png", "svg", "pdf"), scan, north))
-        jobs.append((_segments_files, result.mesh.face_centroids, result.walls, i, sheet, params, n))
+        if segments:
+            jobs.append((_segments_files, result.mesh.face_centroids, result.walls, i, sheet, params, n))
         rooms = [r for r in result.rooms if r.story == i]
         dxf.append((_dxf_files, i, sp.drafting.slices.segments, sp.reference, sp.annotations, symbols, rooms))
     return jobs, dxf
@@ -459,12 +481,36 @@ class EarlyDrawings:
     futures: list
 
 
-def submit_early(pool: RenderPool | None, oriented: Oriented) -> EarlyDrawings | None:
+def submit_early(pool: RenderPool | None, oriented: Oriented, upright: EarlyDrawings | None = None) -> EarlyDrawings | None:
     """Hand the drawings the oriented scan alone decides to the workers of ``pool`` (none
-    without workers: :func:`render_files` then draws everything itself)."""
+    without workers: :func:`render_files` then draws everything itself): the pen-and-ink plans,
+    and the normals and levels unless ``upright`` (:func:`submit_upright`) holds them already
+    (then the drawings of both, those of ``upright`` first)."""
     if pool is None or pool.executor is None:
         return None
-    jobs = _early_jobs(oriented)
+    if upright is None:
+        jobs = _early_jobs(oriented)
+        return EarlyDrawings(jobs, _submit(pool, jobs))
+    jobs = _early_jobs(oriented)[: len(oriented.orientation.stories)]  # the pen-and-ink plans
+    return EarlyDrawings(upright.jobs + jobs, upright.futures + _submit(pool, jobs))
+
+
+def submit_walls(pool: RenderPool | None, oriented: Oriented, walls: FlatWalls, early: EarlyDrawings | None) -> EarlyDrawings | None:
+    """Hand the wall segments figures (:func:`_segments_jobs`) to the workers of ``pool`` once
+    the flat walls are final: the drawings of ``early`` and these (``early`` alone without
+    workers or without early drawings)."""
+    if pool is None or pool.executor is None or early is None:
+        return early
+    jobs = _segments_jobs(oriented, walls)
+    return EarlyDrawings(early.jobs + jobs, early.futures + _submit(pool, jobs))
+
+
+def submit_upright(pool: RenderPool | None, orientation: Orientation, mesh: Mesh, params: RenderParams) -> EarlyDrawings | None:
+    """Hand the drawings the orientation alone decides (:func:`_upright_jobs`) to the workers
+    of ``pool``, as soon as the scan is oriented (``None`` without workers)."""
+    if pool is None or pool.executor is None:
+        return None
+    jobs = _upright_jobs(orientation, mesh, params)
     return EarlyDrawings(jobs, _submit(pool, jobs))
 
 
@@ -487,7 +533,9 @@ def render_files(result: Result, timer: _Timer | None = None, pool: RenderPool |
         if pool is None:
             pool = stack.enter_context(RenderPool(_processes(result.options.render)))
         with stage("slice_draw"):
-            later, dxf = _jobs(result, pool.workers)
+            # the wall segments, when the run handed them over with the early drawings
+            segments_done = early is not None and any(job[0] is _segments_files for job in early.jobs)
+            later, dxf = _jobs(result, pool.workers, segments=not segments_done)
             if early is None:  # none under way: this result's own
                 jobs = _early_jobs(_oriented_of(result))
                 early = EarlyDrawings(jobs, _submit(pool, jobs))
