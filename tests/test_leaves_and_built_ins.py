@@ -197,3 +197,36 @@ def test_walls_short_of_a_scanned_ceiling():
     assert not _walls_short_of(high, n_high, 0.0, 2.7)
     # one face of the high wall among the low ones (7.5 % of the area): walls reaching the band
     assert not _walls_short_of(np.r_[low, high[:1]], np.r_[n_low, n_high[:1]], 0.0, 2.7)
+
+
+# the same wall as BACK seen only from the next room: its face along z = 4.12 facing +z (the
+# wardrobe in front of BACK hides BACK from the room at z < 4)
+OTHER_FACE = _row((0, 4.12), (6, 4.12), (0, 1))
+
+
+@pytest.mark.parametrize("width_m", [0.8, 2.2])
+def test_a_wardrobe_against_a_wall_found_by_its_other_face_is_no_wall(width_m):
+    """A wardrobe's front 0.6 m in front of a wall whose face in this room it hides, the wall
+    found by its face in the next room only (12 cm thick): the front and the sides are no
+    walls. Before, the wall behind had to face the front's way, and the wardrobe closed a room
+    of its own (hard preset, held-out seed 5)."""
+    x0, x1 = 2.0, 2.0 + width_m
+    rows = [OTHER_FACE, _row((x0, 3.4), (x1, 3.4), (0, -1)), _row((x0, 3.4), (x0, 4.0), (-1, 0)), _row((x1, 3.4), (x1, 4.0), (1, 0))]
+    assert _pilasters(rows, WallParams()).tolist() == [False, True, True, True]
+
+
+def test_a_piece_of_a_walls_own_face_is_a_wall_beside_its_other_face():
+    """A piece of the wall's face in this room, 12 cm in front of its other face (the wall's
+    thickness): a wall, not a cupboard's front; nor is a piece 1.1 m away (a room beyond)."""
+    rows = [OTHER_FACE, _row((2.0, 4.0), (3.5, 4.0), (0, -1)), _row((2.0, 3.0), (3.3, 3.0), (0, -1))]
+    assert not _pilasters(rows, WallParams()).any()
+
+
+def test_the_sides_of_a_wardrobe_against_a_wall_found_by_its_other_face_are_no_walls():
+    """Two sides 0.6 m deep, no front, the wall behind found by its other face only: a box's
+    sides (hard preset, held-out seed 6: one side, 2.4 m from the other, cut its hall in two)."""
+    rows = [OTHER_FACE, _row((2.0, 3.4), (2.0, 4.0), (-1, 0)), _row((3.3, 3.4), (3.3, 4.0), (1, 0))]
+    assert _pilasters(rows, WallParams()).tolist() == [False, True, True]
+    # a stub of a partition 1.2 m long, or one side alone: walls
+    assert not _pilasters([OTHER_FACE, _row((2.0, 2.8), (2.0, 4.0), (-1, 0)), _row((3.3, 2.8), (3.3, 4.0), (1, 0))], WallParams()).any()
+    assert not _box_sides(rows[:2], np.zeros(2, bool), WallParams()).any()

@@ -9,7 +9,12 @@ plausible line, the extension of the walls that were scanned:
   other wall was scanned near that point (a T junction, or an L corner whose other leg was
   scanned up to it) or runs on to it too (an L corner whose two legs both stop short);
 * two pieces of one wall line (the same direction, within ``collinear_m`` of each other across)
-  separated by at most ``gap_m`` are joined along their line.
+  separated by at most ``gap_m`` are joined along their line;
+* farther than ``gap_m``, where the other face of the same wall was scanned along the whole
+  run (a face turned away within :data:`WALL_BODY_M` behind it, :func:`back_reach`): furniture
+  against a wall hides its face on one side only, and a wall's two faces run together, so the
+  face hidden on this side runs on, to the first wall line it meets or the next piece of its
+  own line, as far as its other face does.
 
 ``gap_m`` is a door's width plus what scans miss beside it: the widest gap that is still one
 wall pierced by a door rather than an open side of the room. An extension runs no further than
@@ -54,9 +59,18 @@ PARTITION_SEEN_SHARE = 1.0 / 3.0
 #: side or the other (half, since the floor beside a wall reaches into the cells under it).
 RUN_FLOOR_SHARE = 0.5
 
+#: Numeric tolerance (m) of the positions compared along and across a wall (rounding only).
+ROUNDING_M = 1e-9
+
 #: Largest angle (degrees) between two wall pieces taken as one wall line across a gap: within
 #: the alignment's own scatter on a patchy scan; beyond it they are two walls.
 COLLINEAR_ANGLE_DEG = 5.0
+
+#: Thickest wall body (m) between two faces turned away from each other that are taken for the
+#: two faces of one wall (:func:`back_reach`): a 20 cm partition plus plaster and the scan's
+#: noise. Two such faces cannot be the sides of a space (a space lies in front of its faces),
+#: and no cupboard or room fits in 25 cm behind a face.
+WALL_BODY_M = 0.25
 
 
 def end_crossings(tan: FloatArray, nor: FloatArray, off: FloatArray, ends: FloatArray, sign: float) -> tuple[FloatArray, FloatArray, FloatArray]:
@@ -101,6 +115,12 @@ def close_walls(walls: FlatWalls, index: np.ndarray, corner_m: float, gap_m: flo
         The extended spans along each wall's tangent.
     bridges
         Segments closing the gaps between collinear pieces.
+
+    Notes
+    -----
+    Beyond ``gap_m``, an end runs on only along the other face of its own wall
+    (:func:`back_reach`), to the first wall line it meets there (scanned near the crossing, as
+    within ``gap_m``), and not past the next piece of its own line: that gap is bridged instead.
     """
     u_lo = walls.u_min[index].copy()
     u_hi = walls.u_max[index].copy()
@@ -109,13 +129,23 @@ def close_walls(walls: FlatWalls, index: np.ndarray, corner_m: float, gap_m: flo
         return u_lo, u_hi, []
     tan, nor, off = walls.tangent[index], walls.normal[index], walls.offset[index]
     lo, hi = walls.u_min[index], walls.u_max[index]
-    best, target, far_end = {}, {}, {}
+    best, target, far_end, backed = {}, {}, {}, {}
+    met_lo, met_hi = _ends_met(tan, nor, off, lo, hi)
     for sign, ends in ((-1.0, lo), (1.0, hi)):
         denom, s, ub = end_crossings(tan, nor, off, ends, sign)
         outside = np.maximum(lo[None, :] - ub, ub - hi[None, :])  # beyond b's scanned span
-        crossing = (np.abs(denom) >= np.sin(np.radians(MIN_MEETING_ANGLE_DEG))) & (s >= -1e-9) & (s <= gap_m)
+        # a wall whose end meets another wall's face reaches no further there: the crossing
+        # beyond that end would lie past the face, inside or behind the wall it meets
+        reached = np.where(ub < lo[None, :], met_lo[None, :], np.where(ub > hi[None, :], met_hi[None, :], False))
+        outside = np.where(reached & (outside > FREE_END_M), np.inf, outside)
+        meets = (np.abs(denom) >= np.sin(np.radians(MIN_MEETING_ANGLE_DEG))) & (s >= -1e-9)
+        crossing = meets & (s <= gap_m)
+        # beyond gap_m: along the other face of the wall, and short of the next piece of its line
+        backed[sign] = back_reach(tan, nor, off, lo, hi, sign, corner_m)
+        run = np.minimum(backed[sign], _next_in_line(tan, nor, off, lo, hi, sign, collinear_m))
+        crossing |= meets & (s <= run[:, None])
         # a run to a wall scanned (nearly) that far: a corner rounded off (up to corner_m), a
-        # door or a missed piece of wall (up to gap_m)
+        # door or a missed piece of wall (up to gap_m, or along the wall's other face)
         ok = crossing & ((outside <= corner_m) | (s <= corner_m) & (outside <= corner_m))
         # or an L corner whose two legs both stop short (each runs on to the other's line;
         # checked to be mutual below)
@@ -139,12 +169,79 @@ def close_walls(walls: FlatWalls, index: np.ndarray, corner_m: float, gap_m: flo
             u_lo[hit] -= best[sign][hit] + NODE_OVERSHOOT_M
         else:
             u_hi[hit] += best[sign][hit] + NODE_OVERSHOOT_M
-    bridges = _collinear_bridges(tan, nor, off, u_lo, u_hi, gap_m, collinear_m)
+    bridges = _collinear_bridges(tan, nor, off, u_lo, u_hi, gap_m, collinear_m, backed[1.0] - (u_hi - hi))
     return u_lo, u_hi, bridges
 
 
-def _collinear_bridges(tan, nor, off, u_lo, u_hi, gap_m: float, collinear_m: float) -> list[LineString]:
-    """Segments joining the facing ends of collinear wall pieces at most ``gap_m`` apart."""
+def _ends_met(tan: FloatArray, nor: FloatArray, off: FloatArray, lo: FloatArray, hi: FloatArray) -> tuple[np.ndarray, np.ndarray]:
+    """Whether each wall's low and high end meets another wall's face: lies within
+    :data:`FREE_END_M` of the scanned segment of a wall turned from it by at least
+    :data:`MIN_MEETING_ANGLE_DEG` (a T junction, or a corner both walls were scanned into)."""
+    n = len(off)
+    a = lo[:, None] * tan + off[:, None] * nor  # (n, 2) segment starts
+    b = hi[:, None] * tan + off[:, None] * nor
+    turned = np.abs(nor @ nor.T) <= np.cos(np.radians(MIN_MEETING_ANGLE_DEG))
+    np.fill_diagonal(turned, False)
+    out = []
+    for p in (a, b):
+        # distance of each end (rows) to each segment (columns)
+        d = b - a
+        t = np.clip(np.einsum("abk,bk->ab", p[:, None, :] - a[None, :, :], d) / np.maximum(np.einsum("bk,bk->b", d, d), ROUNDING_M), 0.0, 1.0)
+        near = np.linalg.norm(p[:, None, :] - (a[None, :, :] + t[..., None] * d[None, :, :]), axis=2) <= FREE_END_M
+        out.append(np.any(turned & near, axis=1) if n else np.zeros(0, dtype=bool))
+    return out[0], out[1]
+
+
+def back_reach(tan: FloatArray, nor: FloatArray, off: FloatArray, lo: FloatArray, hi: FloatArray, sign: float, corner_m: float) -> FloatArray:
+    """How far (m) beyond each wall's end (``sign``: -1 its low end ``lo``, +1 its high end
+    ``hi``, along its tangent ``tan``) the other face of the same wall was scanned: the farthest
+    reach past that end of a face turned away from it (normals within
+    :data:`COLLINEAR_ANGLE_DEG` of opposite), behind it by at most :data:`WALL_BODY_M` at both
+    of its ends, whose span covers the end, plus ``corner_m`` (the other face's own end is
+    rounded off at its corner too); 0 where there is none.
+
+    A wall's two faces run together: where furniture against it hid one face, the face scanned
+    from the other side shows where the wall goes on.
+    """
+    n = len(off)
+    out = np.zeros(n)
+    if n < 2:
+        return out
+    away = nor @ nor.T <= -np.cos(np.radians(COLLINEAR_ANGLE_DEG))
+    np.fill_diagonal(away, False)
+    if not away.any():
+        return out
+    ends_b = np.stack([lo[:, None] * tan + off[:, None] * nor, hi[:, None] * tan + off[:, None] * nor], axis=1)  # (n, 2, 2)
+    # depth of b's two ends behind a's face, and their positions along a's tangent
+    depth = off[:, None, None] - np.einsum("ak,bek->abe", nor, ends_b)
+    along = np.einsum("ak,bek->abe", tan, ends_b)
+    b_lo, b_hi = along.min(axis=2), along.max(axis=2)
+    end = hi if sign > 0 else lo
+    behind = away & np.all((depth >= -ROUNDING_M) & (depth <= WALL_BODY_M), axis=2)
+    covers = behind & (b_lo <= end[:, None] + ROUNDING_M) & (b_hi >= end[:, None] - ROUNDING_M)
+    reach = np.where(covers, (b_hi - end[:, None]) if sign > 0 else (end[:, None] - b_lo), -np.inf).max(axis=1)
+    return np.where(np.isfinite(reach), np.maximum(reach, 0.0) + corner_m, 0.0)
+
+
+def _next_in_line(tan: FloatArray, nor: FloatArray, off: FloatArray, lo: FloatArray, hi: FloatArray, sign: float, collinear_m: float) -> FloatArray:
+    """Distance (m) from each wall's end (``sign`` as in :func:`back_reach`) to the nearest end
+    of the next piece of its own line ahead (the same facing within
+    :data:`COLLINEAR_ANGLE_DEG`, within ``collinear_m`` across); inf where there is none."""
+    cos = nor @ nor.T
+    same = cos >= np.cos(np.radians(COLLINEAR_ANGLE_DEG))
+    np.fill_diagonal(same, False)
+    across = np.abs(off[:, None] - off[None, :])
+    end = hi if sign > 0 else lo
+    near = lo[None, :] if sign > 0 else hi[None, :]  # b's end facing a's end (same facing: same tangent)
+    ahead = sign * (near - end[:, None])
+    ok = same & (across <= collinear_m) & (ahead > 0)
+    return np.where(ok, ahead, np.inf).min(axis=1) if len(off) else np.zeros(0)
+
+
+def _collinear_bridges(tan, nor, off, u_lo, u_hi, gap_m: float, collinear_m: float, backed: FloatArray | None = None) -> list[LineString]:
+    """Segments joining the facing ends of collinear wall pieces at most ``gap_m`` apart, or,
+    beyond ``gap_m``, at most ``backed`` (per wall: how far the other face of its wall runs on
+    past its high end, :func:`back_reach`)."""
     n = len(off)
     cos = nor @ nor.T
     same = np.abs(cos) >= np.cos(np.radians(COLLINEAR_ANGLE_DEG))
@@ -154,7 +251,8 @@ def _collinear_bridges(tan, nor, off, u_lo, u_hi, gap_m: float, collinear_m: flo
     # positions along a's tangent of b's span (the tangent flips with the normal)
     b_lo = np.where(flip > 0, u_lo[None, :], -u_hi[None, :])
     gap = b_lo - u_hi[:, None]  # b starts after a ends
-    ok = same & (across <= collinear_m) & (gap > 0) & (gap <= gap_m)
+    reach = np.full(n, gap_m) if backed is None else np.maximum(gap_m, backed)
+    ok = same & (across <= collinear_m) & (gap > 0) & (gap <= reach[:, None])
     np.fill_diagonal(ok, False)
     out = []
     for a in range(n):

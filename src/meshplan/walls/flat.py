@@ -839,7 +839,13 @@ def _pilasters(rows: list[dict], params: WallParams, raster: StoryRaster | None 
     pilasters, engaged columns, chimney breasts, or cupboards and wardrobes against the wall
     (whose tops the scan may not show, so that they rise as high as the walls were scanned):
     the wall behind bounds the room and is drawn across them. A step of a wall (the wall
-    behind on one side only) and a niche (a piece behind the wall) stay."""
+    behind on one side only) and a niche (a piece behind the wall) stay.
+
+    Where the front hides the face of the wall behind it, that wall may have been found by its
+    other face only, scanned from the next room: a longer wall turned away from the front
+    (within :data:`PILASTER_PARALLEL_DEG` of opposite), which the front stands in front of by
+    more than a wall's thickness and at most :data:`PILASTER_DEPTH_M` plus one
+    (``max_wall_thickness_m``; :func:`_behind_wall`), is the wall behind too."""
     n = len(rows)
     out = np.zeros(n, dtype=bool)
     if n < 2:
@@ -859,7 +865,8 @@ def _pilasters(rows: list[dict], params: WallParams, raster: StoryRaster | None 
         # parallel either way: a scan's faces on a cupboard's front may be turned into the box
         # (the facing of a closed box, seen from one side, is a guess)
         ok = (length > length[i]) & (np.abs(nor @ nor[i]) >= cos_par)
-        ok &= np.all((depth > params.box_depth_m / 2) & (depth <= PILASTER_DEPTH_M), axis=0)
+        front_of = np.all((depth > params.box_depth_m / 2) & (depth <= PILASTER_DEPTH_M), axis=0)
+        ok &= front_of | ((nor @ nor[i] <= -cos_par) & np.all(_behind_wall(-depth, params), axis=0))
         ok &= (u.min(axis=0) >= lo + margin) & (u.max(axis=0) <= hi - margin)
         ok[i] = False
         if ok.any():
@@ -875,6 +882,9 @@ def _pilasters(rows: list[dict], params: WallParams, raster: StoryRaster | None 
             along = ends[j] @ tan[i]
             at_end = np.minimum(np.abs(along - lo[i]), np.abs(along - hi[i])) <= CONNECT_M
             front = ends[i, 0] @ nor[b] - off[b]
+            # measured towards the front: behind b's plane where b is the wall's other face
+            way = 1.0 if front >= 0 else -1.0
+            across, front = way * across, way * front
             if np.all((across >= -CONNECT_M) & (across <= front + CONNECT_M) & at_end):
                 out[j] = True
     return out | _box_sides(rows, out, params, raster)
@@ -891,7 +901,9 @@ def _box_sides(rows: list[dict], dropped: np.ndarray, params: WallParams, raster
     the wall has its front kept, the jambs of a doorway through a thick wall meet its other
     face, and a corridor's walls are longer. With the story's ``raster``, one such side alone
     is a box's too where its front, as high as the side, runs on from its free end along the
-    wall (:func:`_front_at`; the front itself no wall, hidden by the wall behind it)."""
+    wall (:func:`_front_at`; the front itself no wall, hidden by the wall behind it). The wall
+    may be the one behind the box found by its other face only (the box hides this one), the
+    sides then standing behind it by more than a wall's thickness (:func:`_behind_wall`)."""
     n = len(rows)
     out = np.zeros(n, dtype=bool)
     if n < (2 if raster is not None else 3):  # a wall and one side, or two
@@ -918,7 +930,8 @@ def _box_sides(rows: list[dict], dropped: np.ndarray, params: WallParams, raster
         at_wall = np.abs(depth[k, foot]) <= CONNECT_M
         tip = depth[k, 1 - foot]
         along = ends[side, 0] @ tan[b]
-        ok = at_wall & (tip > params.box_depth_m / 2) & (tip <= PILASTER_DEPTH_M) & (along >= lo[b]) & (along <= hi[b])
+        ok = at_wall & ((tip > params.box_depth_m / 2) & (tip <= PILASTER_DEPTH_M) | _behind_wall(-tip, params)) & (along >= lo[b]) & (along <= hi[b])
+        tip = np.abs(tip)  # how far the box stands out, from either face (levelled below)
         # the free end meets no kept wall parallel to b (a front: the box is a pier of the
         # wall; the other face of a thick wall: the jambs of a doorway through it)
         tips = ends[side, 1 - foot]
@@ -940,6 +953,15 @@ def _box_sides(rows: list[dict], dropped: np.ndarray, params: WallParams, raster
                 if _front_at(raster, tips[a], tan[b], float(rows[side[a]]["top"])):
                     out[side[a]] = True
     return out
+
+
+def _behind_wall(depth: FloatArray, params: WallParams) -> np.ndarray:
+    """Whether points ``depth`` (m) behind a wall's face stand out of the wall's other face as
+    a box's front would (:func:`_pilasters`, :func:`_box_sides`): deeper than the thickest wall
+    (``max_wall_thickness_m``) plus half a DBSCAN box's depth, so that the wall's own other face
+    is never one, and at most :data:`PILASTER_DEPTH_M` beyond the thickest wall."""
+    t = params.max_wall_thickness_m
+    return (depth > t + params.box_depth_m / 2) & (depth <= PILASTER_DEPTH_M + t)
 
 
 #: Where a box's front is looked for beside the free end of one of its sides (m along the wall
