@@ -181,14 +181,16 @@ def test_a_parametric_apartment_without_ceiling(computed, seed):
     assert report["windows"]["precision"] == 1.0 and report["windows"]["recall"] == 1.0, report["windows"]
 
 
-@pytest.mark.parametrize("seed", [1, 2, 3])
+@pytest.mark.parametrize("seed", [1, 2, 3, 4, 5, 6, 7, 8])
 def test_the_hard_preset_meets_the_issue_bounds(computed, seed):
     """Issue 9 item 8's bounds on the hard preset (walls scanned to 1.4-2.0 m, no ceiling, door
     leaves open at random angles, built-in wardrobes, kitchen fronts, a decimated mesh, walls at
     angles): wall F1 >= 0.95, room recall >= 0.95, median area error <= 0.5 %. And what made
     them: no room split off by a leaf or a wardrobe's side (no extra room), the doors found
     although their heads were not scanned. Before (seeds 1-3): F1 0.74-0.89, room precision
-    0.56-0.75, median area error 2.4-4.4 %, 0 of 7 doors on seed 1."""
+    0.56-0.75, median area error 2.4-4.4 %, 0 of 7 doors on seed 1. Seeds 4-8 were held out
+    until they met the bounds too (seeds 9-12 still are: 24/24 rooms, 27/28 doors, 32/33
+    windows, wall F1 0.98-1.0)."""
     scan, result = computed("hard", seed)
     report = evaluate(plan_document(result), scan.truth)
     rooms, doors, walls = report["rooms"], report["doors"], report["walls"]
