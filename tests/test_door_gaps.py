@@ -490,3 +490,34 @@ def test_the_wall_beside_a_leaf_clustered_with_it_gives_the_face_its_plane(leaf_
     assert front[a:b] == pytest.approx(0.07, abs=0.005)
     assert np.all(front[a:b] - profile[a:b] >= LEAF_SET_BACK_M)
     assert _local_front(_depths(np.zeros(ncol)), ncol, CELL, rows, on_face, -0.33, 0.08) is None
+
+
+def _headless_with(edge: str) -> list:
+    """The headless gap of :func:`_headless` (wall scanned to 1.55 m, gap 1.0-1.85 m), with the
+    column next to its left jamb holding ``edge``: "leaf", a leaf's edge at its hinge from the
+    floor to 0.8 m (the jamb itself beside it scanned to the wall's top); "specks", the right
+    jamb replaced by specks, one 0.85 m up and one near the ceiling, nothing from the floor."""
+    f = _frame(CEILING)
+    grid = f.grid.copy()
+    top_row = int(round(1.55 / CELL))
+    grid[top_row : grid.shape[0] - f.margin] = False
+    grid[grid.shape[0] - f.margin :] = True
+    c0, c1 = int(round(1.0 / CELL)), int(round(1.85 / CELL))
+    if edge == "leaf":
+        grid[: int(round(0.8 / CELL)), c0] = True  # the gap now starts one column later
+    else:
+        grid[f.margin :, c1:] = False
+        grid[int(round(0.85 / CELL)), c1] = True
+        grid[int(round(2.3 / CELL)), c1 + 1] = True
+    walls = SimpleNamespace(u_min=np.array([0.0]), u_max=np.array([3.0]))
+    return _doors(_Frame(grid, f.lo, f.floor, f.ceiling, f.cell, f.margin, f.vu, f.vy, 0, False, False), walls, np.ones(grid.shape[1]), PlanParams())
+
+
+def test_a_leaf_edge_beside_a_jamb_is_not_the_jamb_top() -> None:
+    """A leaf nearly closed leaves its edge at the hinge, 0.8 m high, in the column next to the
+    jamb scanned to the wall's top: the jamb is that wall (hard seed 9), so the gap is a door; a
+    far side holding only specks, one of them near the ceiling, has no jamb (a real room's open
+    side beside a table)."""
+    (door,) = _headless_with("leaf")
+    assert door.how == "head unseen"
+    assert _headless_with("specks") == []

@@ -996,7 +996,15 @@ def _doors(f: _Frame, walls: FlatWalls, floor_cols: np.ndarray, params: PlanPara
             # surfaces (the head is in the unscanned band over the wall's top)
             if floor_cols[run].mean() < params.door_floor_beyond:
                 continue
-            jamb_top = min(col_top[lj[0]], col_top[rj[0]])
+            # each jamb's top: the highest of the columns of wall from near the floor among its
+            # column and the EDGE_CELLS beside it in the wall, not the column nearest the gap
+            # alone, which may hold only the edge of a leaf standing at the hinge (hard seed 9: a
+            # leaf nearly closed, its edge 0.8 m high beside a jamb scanned to 1.55 m); columns
+            # holding nothing near the floor (specks high up) are no jamb
+            jamb_top = min(
+                np.max(np.where(low_wall, col_top, f.floor)[max(lj[0] - EDGE_CELLS, 0) : lj[0] + 1]),
+                np.max(np.where(low_wall, col_top, f.floor)[rj[0] : rj[0] + EDGE_CELLS + 1]),
+            )
             if jamb_top >= min(f.floor + DOOR_HEAD_MAX_M, f.ceiling - params.opening_margin_m - tol):
                 top, how = f.ceiling, "no lintel"
             elif jamb_top - f.floor >= HEAD_UNSEEN_MIN_TOP_M and _jambs_reach_wall_top(f, col_top, lj[0], rj[0]):
