@@ -521,3 +521,21 @@ def test_a_leaf_edge_beside_a_jamb_is_not_the_jamb_top() -> None:
     (door,) = _headless_with("leaf")
     assert door.how == "head unseen"
     assert _headless_with("specks") == []
+
+
+def test_a_window_notch_is_capped_at_its_own_jambs_not_at_the_wall_farther_along() -> None:
+    """A window 4.7-6.0 m along from a 0.9 m sill, its jambs' pieces scanned to 1.4 m and the
+    wall farther along to 1.75-1.95 m: the notch ends at the jambs' tops (1.4 m), a rectangle;
+    capped at the highest wall within a window's width, it ran on over the jambs (hard seed 12's
+    bathroom window). A hole scanned nowhere beside a low piece of wall still joins it: no
+    window stands between a hole and a jamb."""
+    from meshplan.plan.doors import _notch_windows
+
+    tops = [(1.9, 2.4, 1.95), (2.4, 3.4, 1.95), (3.4, 3.9, 1.95), (3.9, 4.7, 1.4), (4.7, 6.0, 0.9), (6.0, 6.2, 1.4), (6.2, 7.6, 1.75)]
+    frame = _scanned_to(tops, length_m=8.0)
+    walls = SimpleNamespace(u_min=np.array([1.9]), u_max=np.array([7.6]))
+    (w,) = [c for c in _notch_windows(frame, walls, PlanParams()) if c.kind == "window"]
+    assert [w.u_min, w.u_max, w.bottom] == pytest.approx([4.7, 6.0, 0.9], abs=CELL)
+    hole = [(1.9, 3.0, 1.75), (3.0, 3.5, 0.0), (3.5, 4.5, 0.75), (4.5, 7.6, 1.75)]
+    frame = _scanned_to(hole, length_m=8.0)
+    assert [c for c in _notch_windows(frame, walls, PlanParams()) if c.kind == "window"] == []

@@ -1157,10 +1157,12 @@ def _notch_windows(f: _Frame, walls: FlatWalls, params: PlanParams) -> list[Cand
     if f.right_corner:
         top_rows[ncol - EDGE_CELLS :] = -1
     k = int(np.ceil(params.window_width_m[1] / cell))
-    # the highest column within k columns on each side of each column (itself included)
+    # a column with nothing scanned (a hole, a doorway) is capped by the highest column within
+    # k columns on each side (itself included), the lower side's: it stays as open as the wall
+    # around it was scanned, and joins what it touches; a scanned column by its jambs
     left = ndimage.maximum_filter1d(top_rows, size=k + 1, origin=k // 2, mode="nearest")
     right = ndimage.maximum_filter1d(top_rows, size=k + 1, origin=-(k // 2) - (k % 2), mode="nearest")
-    cap = np.minimum(left, right)
+    cap = np.where(top_rows >= 0, _jamb_caps(top_rows, int(np.ceil(params.window_height_m / cell - 1e-9)), k), np.minimum(left, right))
     grid = g.copy()
     grid[np.arange(nrow)[:, None] > cap[None, :]] = True
     out = []
@@ -1194,6 +1196,35 @@ def _tall_runs(empty: np.ndarray, cell: float, params: PlanParams) -> np.ndarray
     if rows <= 1 or not empty.any():
         return empty
     return ndimage.binary_opening(empty, structure=np.ones((rows, 1), dtype=bool))
+
+
+def _jamb_caps(top_rows: IntArray, rise: int, reach: int) -> IntArray:
+    """Each column's cap for :func:`_notch_windows`: the top row of the lower of its jambs, the
+    nearest column on either side within ``reach`` columns whose top stands at least ``rise``
+    rows above its own (a piece of wall beside a notch); its own top where a side has none (no
+    notch there). Unfilled columns (``-1``) are no jamb, and get no cap here (``-1``).
+
+    The nearest such column, not the highest within ``reach`` (a window's greatest width): a
+    piece of wall scanned higher farther along (1.75-1.95 m beside jambs scanned to 1.4 m) raised
+    the cap above the jambs, so that the notch's empty space ran on over them and was no
+    rectangle (hard preset, seed 12: a bathroom window)."""
+    n = len(top_rows)
+    caps = []
+    for step in (1, -1):  # the jamb on the left (columns before), then on the right
+        cap = np.full(n, -1, dtype=np.int64)
+        found = np.zeros(n, dtype=bool)
+        for d in range(1, min(reach, n - 1) + 1):
+            other = np.full(n, -1, dtype=np.int64)
+            if step > 0:
+                other[d:] = top_rows[:-d]
+            else:
+                other[:-d] = top_rows[d:]
+            hit = ~found & (top_rows >= 0) & (other >= top_rows + rise)
+            cap[hit] = other[hit]
+            found |= hit
+        caps.append(np.where(found, cap, -1))
+    both = (caps[0] >= 0) & (caps[1] >= 0)
+    return np.where(both, np.minimum(caps[0], caps[1]), top_rows)
 
 
 def _largest_rectangle(box: np.ndarray) -> tuple[int, int, int, int]:
