@@ -539,3 +539,18 @@ def test_a_window_notch_is_capped_at_its_own_jambs_not_at_the_wall_farther_along
     hole = [(1.9, 3.0, 1.75), (3.0, 3.5, 0.0), (3.5, 4.5, 0.75), (4.5, 7.6, 1.75)]
     frame = _scanned_to(hole, length_m=8.0)
     assert [c for c in _notch_windows(frame, walls, PlanParams()) if c.kind == "window"] == []
+
+
+def test_the_bare_wall_between_two_shelves_is_no_leaf_set_back() -> None:
+    """A wall (depth 0) with two shelves standing 6 cm out of it, 0.8 m and 1.0 m wide, 0.7 m
+    apart: the wall between them dips below its neighbours like a leaf set back in its frame,
+    but it is the surface most of the wall around shows, so no closed-door search is made there
+    (office preset, seed 4: a low-confidence door between two shelves)."""
+    from meshplan.plan.doors import _local_front
+
+    ncol = 120
+    profile = np.zeros(ncol)
+    profile[30:46] = 0.06  # a shelf
+    profile[60:80] = 0.06  # another, 0.7 m along
+    front = _local_front(_depths(profile), ncol, CELL, slice(3, 36), np.ones(ncol, dtype=bool), -0.33, 0.08)
+    assert front is None

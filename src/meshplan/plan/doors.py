@@ -127,6 +127,10 @@ FRONT_BIN_M = 0.008
 #: the wall's front (:func:`_local_front`): the widest door leaf (1.5 m, ``door_width_m``) and
 #: its frame.
 LEAF_FRONT_SPAN_M = 1.7
+#: ... and a leaf stands back from the front most of the wall around it shows, over this span
+#: (m, centred on it): two door widths either side, where furniture against the wall (shelves,
+#: cabinets) covers less than half.
+WALL_FRONT_SPAN_M = 4.0
 
 #: A recess within this distance (m) of a door or window found in the same face is part of it
 #: (the leaf or the room beyond seen through a doorway, the reveal around a window's hole), not
@@ -745,6 +749,16 @@ def _local_front(
     wall = ndimage.grey_closing(front, size=width, mode="nearest")
     dip = on_face & has & (wall >= LEAF_SET_BACK_M) & (front <= wall - LEAF_SET_BACK_M)
     # a leaf is a door wide: a shorter dip (a picture frame, a switch) is no reason to search
+    if _longest_run(dip) < min_cols:
+        return None
+    # and set back from the wall's surface, the front most of the wall around it shows, not
+    # from furniture standing a few centimetres out of it on both sides (the bare wall between
+    # two shelves: office preset, seed 4)
+    half = int(np.ceil(WALL_FRONT_SPAN_M / 2 / cell))
+    for c in np.flatnonzero(dip):
+        around = front[max(c - half, 0) : c + half + 1][has[max(c - half, 0) : c + half + 1]]
+        if front[c] > np.median(around) - LEAF_SET_BACK_M:
+            dip[c] = False
     return wall if _longest_run(dip) >= min_cols else None
 
 
