@@ -554,3 +554,21 @@ def test_the_bare_wall_between_two_shelves_is_no_leaf_set_back() -> None:
     profile[60:80] = 0.06  # another, 0.7 m along
     front = _local_front(_depths(profile), ncol, CELL, slice(3, 36), np.ones(ncol, dtype=bool), -0.33, 0.08)
     assert front is None
+
+
+def test_a_strip_missing_from_a_wall_scanned_to_the_ceiling_is_no_headless_window() -> None:
+    """A face scanned to the ceiling with a full-height strip missing 2.0-2.5 m along, crossed by
+    a bar at 0.7-0.75 m and holding specks at 2.3 m (a missing strip of the apartment preset's
+    seed 6): its jambs reach the ceiling, so its head would show; the specks gave its columns
+    caps of their own, which read as a notch up to 2.35 m."""
+    from meshplan.plan.doors import _notch_windows
+
+    f = _frame(CEILING, length_m=6.0)
+    grid = np.ones_like(f.grid)
+    c0, c1 = int(round(2.0 / CELL)), int(round(2.5 / CELL))
+    grid[f.margin : grid.shape[0] - f.margin, c0:c1] = False
+    grid[int(round(0.7 / CELL)), c0:c1] = True  # the bar
+    grid[int(round(2.3 / CELL)), c0 + 2 : c0 + 4] = True  # specks high up
+    frame = _Frame(grid, f.lo, f.floor, f.ceiling, f.cell, f.margin, np.zeros(0), np.zeros(0), 0, False, False)
+    walls = SimpleNamespace(u_min=np.array([0.0]), u_max=np.array([6.0]))
+    assert [c for c in _notch_windows(frame, walls, PlanParams()) if c.kind == "window"] == []

@@ -1185,7 +1185,14 @@ def _notch_windows(f: _Frame, walls: FlatWalls, params: PlanParams) -> list[Cand
             continue
         a = int(np.clip(np.floor((c.u_min - f.lo) / cell), 0, ncol - 1))
         b = int(np.clip(np.ceil((c.u_max - f.lo) / cell), a + 1, ncol))
-        scanned_top = f.floor + (int(cap[a:b].min()) + 1) * cell  # the lower jamb's top
+        # the lower jamb's top: the highest of the EDGE_CELLS columns beside the notch on each
+        # side (its own columns' caps may be their own tops, where specks high up in a slot
+        # scanned nowhere else found no jamb above them: a full-height strip missing from a wall
+        # read as a notch up to the specks)
+        jambs = (top_rows[max(a - EDGE_CELLS, 0) : a], top_rows[b : b + EDGE_CELLS])
+        if not (len(jambs[0]) and len(jambs[1])):
+            continue
+        scanned_top = f.floor + (int(min(jambs[0].max(), jambs[1].max())) + 1) * cell
         if scanned_top >= f.ceiling - params.opening_margin_m - EDGE_CELLS * cell or scanned_top - f.floor < HEAD_UNSEEN_MIN_TOP_M:
             continue  # jambs scanned to the ceiling (the head would show), or no higher than the work surfaces
         if c.top >= scanned_top - EDGE_CELLS * cell:  # up to where the scan stopped
