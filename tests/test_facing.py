@@ -39,12 +39,7 @@ def _wall(x: float, z0: float, z1: float, facing: float, n: int = 8) -> tuple[np
 
 
 def _mesh(parts) -> Mesh:
-    verts, faces, off = [], [], 0
-    for v, f in parts:
-        verts.append(v)
-        faces.append(f + off)
-        off += len(v)
-    return Mesh(np.concatenate(verts), np.concatenate(faces))
+    return Mesh.concatenate([Mesh(v, f) for v, f in parts])
 
 
 @pytest.mark.parametrize("scanned", [1.0, -1.0])

@@ -447,6 +447,31 @@ def _ends(r: dict) -> tuple[FloatArray, FloatArray]:
     return r["u_min"] * t + r["offset"] * n, r["u_max"] * t + r["offset"] * n
 
 
+@dataclass(frozen=True, eq=False)
+class _Rows:
+    """The wall rows of a story as arrays: each row's ``normal`` and ``tangent`` (``(n, 2)``),
+    ``offset``, span ``lo`` to ``hi`` along its tangent and ``length``, and its plan ``ends``
+    (``(n, 2 ends, 2)``, :func:`_ends`)."""
+
+    normal: FloatArray
+    tangent: FloatArray
+    offset: FloatArray
+    lo: FloatArray
+    hi: FloatArray
+    ends: FloatArray
+
+    @property
+    def length(self) -> FloatArray:
+        return self.hi - self.lo
+
+    @classmethod
+    def of(cls, rows: list[dict]) -> _Rows:
+        nor = np.array([r["normal"] for r in rows], dtype=np.float64).reshape(-1, 2)
+        lo, hi = np.array([r["u_min"] for r in rows], dtype=np.float64), np.array([r["u_max"] for r in rows], dtype=np.float64)
+        ends = np.array([_ends(r) for r in rows], dtype=np.float64).reshape(-1, 2, 2)
+        return cls(nor, np.c_[-nor[:, 1], nor[:, 0]], np.array([r["offset"] for r in rows], dtype=np.float64), lo, hi, ends)
+
+
 def _mergeable(o: dict, r: dict, depth_half: float, gap: float, cos_merge: float) -> bool:
     """Whether two rectangles are pieces of one plane: directions within :data:`MERGE_DEG`,
     the ends of the shorter within ``depth_half`` of the longer's plane, and at most ``gap``
@@ -566,8 +591,8 @@ def _merge(rows: list[dict], depth_half: float, gap: float) -> list[dict]:
     while changed:
         changed = False
         rows.sort(key=lambda r: (r["direction"], r["offset"], r["u_min"]))
-        ends = np.array([_ends(r) for r in rows]).reshape(-1, 2, 2)
-        nor = np.array([r["normal"] for r in rows]).reshape(-1, 2)
+        g = _Rows.of(rows)
+        ends, nor = g.ends, g.normal
         out: list[dict] = []
         for r in rows:
             for o in out:
@@ -787,9 +812,8 @@ def _facing_back(rows: list[dict]) -> tuple[np.ndarray, FloatArray]:
     :data:`PILASTER_PARALLEL_DEG`, facing the other way, running alongside each other over
     :data:`CORE_OVERLAP_SHARE` of the shorter), and how far ``d[i, j]`` row ``j``'s plane lies in
     front of row ``i``'s (m; negative behind)."""
-    nor = np.array([r["normal"] for r in rows], dtype=np.float64)
-    off = np.array([r["offset"] for r in rows])
-    lo, hi = np.array([r["u_min"] for r in rows]), np.array([r["u_max"] for r in rows])
+    g = _Rows.of(rows)
+    nor, off, lo, hi = g.normal, g.offset, g.lo, g.hi
     opposite = nor @ nor.T <= -np.cos(np.radians(PILASTER_PARALLEL_DEG))
     # with n_j = -n_i, j's plane lies d = -off_j - off_i in front of i's; j's tangent is -i's,
     # so j runs over [-hi_j, -lo_j] along i
@@ -822,9 +846,8 @@ def _outer_faces(rows: list[dict], raster: StoryRaster, params: WallParams) -> n
     twin = facing_back & (np.abs(d) <= CORE_MIN_M)
     if not twin.any():
         return out
-    ends = np.array([_ends(r) for r in rows])
-    nor = np.array([r["normal"] for r in rows], dtype=np.float64)
-    seen = seen_in_front(raster, ends[:, 0], ends[:, 1], nor, OUTSIDE_NEAR_M, params.context_m)
+    g = _Rows.of(rows)
+    seen = seen_in_front(raster, g.ends[:, 0], g.ends[:, 1], g.normal, OUTSIDE_NEAR_M, params.context_m)
     outside = seen <= 1.0 - OUTSIDE_SHARE
     return outside & np.any(twin & ~outside[None, :], axis=1)
 
@@ -852,12 +875,8 @@ def _pilasters(rows: list[dict], params: WallParams, raster: StoryRaster | None 
         return out
     cos_par = np.cos(np.radians(PILASTER_PARALLEL_DEG))
     margin = params.box_length_m / 2
-    nor = np.array([r["normal"] for r in rows], dtype=np.float64)
-    tan = np.c_[-nor[:, 1], nor[:, 0]]
-    off = np.array([r["offset"] for r in rows])
-    lo, hi = np.array([r["u_min"] for r in rows]), np.array([r["u_max"] for r in rows])
-    length = hi - lo
-    ends = np.array([_ends(r) for r in rows])  # (n, 2 ends, 2)
+    g = _Rows.of(rows)
+    nor, tan, off, lo, hi, length, ends = g.normal, g.tangent, g.offset, g.lo, g.hi, g.length, g.ends
     fronts = []
     for i in np.flatnonzero(length <= BUILT_IN_FRONT_M):
         depth = ends[i] @ nor.T - off[None, :]  # how far each end stands in front of each plane
@@ -909,12 +928,8 @@ def _box_sides(rows: list[dict], dropped: np.ndarray, params: WallParams, raster
     if n < (2 if raster is not None else 3):  # a wall and one side, or two
         return out
     cos_par = np.cos(np.radians(PILASTER_PARALLEL_DEG))
-    nor = np.array([r["normal"] for r in rows], dtype=np.float64)
-    tan = np.c_[-nor[:, 1], nor[:, 0]]
-    off = np.array([r["offset"] for r in rows])
-    lo, hi = np.array([r["u_min"] for r in rows]), np.array([r["u_max"] for r in rows])
-    length = hi - lo
-    ends = np.array([_ends(r) for r in rows])  # (n, 2 ends, 2)
+    g = _Rows.of(rows)
+    nor, tan, off, lo, hi, length, ends = g.normal, g.tangent, g.offset, g.lo, g.hi, g.length, g.ends
     short = np.flatnonzero(~dropped & (length <= PILASTER_DEPTH_M + CONNECT_M))
     if len(short) < (1 if raster is not None else 2):
         return out
