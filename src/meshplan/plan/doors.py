@@ -963,8 +963,7 @@ def _doors(f: _Frame, walls: FlatWalls, floor_cols: np.ndarray, params: PlanPara
     # empty rows from the floor band up, per column, and whether anything is above them
     first = np.where(filled, np.argmax(body, axis=0), body.shape[0])
     head = f.floor + (m + first) * cell  # where the column's empty space from the floor ends
-    top_rows = body.shape[0] - 1 - np.argmax(body[::-1], axis=0)
-    col_top = np.where(filled, f.floor + (m + top_rows + 1) * cell, f.floor)  # highest wall in it
+    col_top: FloatArray = f.floor + (_wall_tops(g, m) + 1).astype(np.float64) * cell  # highest wall in it (the floor in none)
     tall = head >= f.floor + params.door_height_m - tol
     low_wall = first * cell <= 0.5 * params.door_height_m  # wall (a jamb) from near the floor
     out = []
@@ -1124,13 +1123,12 @@ def _headless_windows(f: _Frame, walls: FlatWalls, params: PlanParams) -> list[C
     (:func:`_window_regions`); its head is assumed (:data:`WINDOW_HEAD_ASSUMED_M`)."""
     g, cell, m = f.grid, f.cell, f.margin
     nrow, ncol = g.shape
-    body = g[m : nrow - m]
+    tops = _wall_tops(g, m)
     col_u = f.lo + (np.arange(ncol) + 0.5) * cell
-    filled = body.any(axis=0) & (col_u >= walls.u_min[f.wall]) & (col_u <= walls.u_max[f.wall])
+    filled = (tops >= 0) & (col_u >= walls.u_min[f.wall]) & (col_u <= walls.u_max[f.wall])
     if not filled.any():
         return []
-    top_rows = body.shape[0] - 1 - np.argmax(body[::-1], axis=0)
-    top_row = int(np.median(top_rows[filled])) + m  # the last row of wall, in grid rows
+    top_row = int(np.median(tops[filled] - m)) + m  # the last row of wall, in grid rows
     scanned_top = f.floor + (top_row + 1) * cell
     if scanned_top >= f.ceiling - params.opening_margin_m - EDGE_CELLS * cell or scanned_top - f.floor < HEAD_UNSEEN_MIN_TOP_M:
         return []
@@ -1156,12 +1154,10 @@ def _notch_windows(f: _Frame, walls: FlatWalls, params: PlanParams) -> list[Cand
     (:data:`WINDOW_HEAD_ASSUMED_M`)."""
     g, cell, m = f.grid, f.cell, f.margin
     nrow, ncol = g.shape
-    body = g[m : nrow - m]
     col_u = f.lo + (np.arange(ncol) + 0.5) * cell
-    filled = body.any(axis=0)
-    if not (filled & (col_u >= walls.u_min[f.wall]) & (col_u <= walls.u_max[f.wall])).any():
+    top_rows = _wall_tops(g, m)  # the last row of wall
+    if not ((top_rows >= 0) & (col_u >= walls.u_min[f.wall]) & (col_u <= walls.u_max[f.wall])).any():
         return []
-    top_rows = np.where(filled, body.shape[0] - 1 - np.argmax(body[::-1], axis=0) + m, -1)  # the last row of wall
     # the columns a corner closes (:func:`_gaps`) stand for the perpendicular wall, not for how
     # high this one was scanned: taken as jambs' tops, they raised the cap of every column
     # within a window's width of the corner to the raster's top (hard preset, seed 4: two
@@ -1217,6 +1213,15 @@ def _tall_runs(empty: np.ndarray, cell: float, params: PlanParams) -> np.ndarray
     if rows <= 1 or not empty.any():
         return empty
     return ndimage.binary_opening(empty, structure=np.ones((rows, 1), dtype=bool))
+
+
+def _wall_tops(grid: np.ndarray, margin: int) -> IntArray:
+    """Each column's last row of wall (in ``grid``'s rows) between the ``margin`` rows closed at
+    the floor and at the ceiling; -1 where the column holds none."""
+    body = grid[margin : grid.shape[0] - margin]
+    if not body.shape[0]:
+        return np.full(grid.shape[1], -1, dtype=np.int64)
+    return np.where(body.any(axis=0), body.shape[0] - 1 - np.argmax(body[::-1], axis=0) + margin, -1)
 
 
 def _jamb_caps(top_rows: IntArray, rise: int, reach: int) -> IntArray:
