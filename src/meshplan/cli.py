@@ -44,6 +44,9 @@ _STARTING = (
 )
 if _STARTING:
     signal.signal(signal.SIGINT, _interrupted_while_starting)
+    from ._memory import keep_freed_memory
+
+    keep_freed_memory()  # before numpy allocates: every array of the run reuses freed memory
 
 import typer  # noqa: E402 - after the handler above: this import takes a while
 

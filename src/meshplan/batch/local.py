@@ -14,6 +14,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
+from .._memory import keep_freed_memory
 from .worker import _limit_threads, _single_threaded_env
 
 __all__ = ["START_METHOD"]
@@ -37,6 +38,7 @@ def _worker_main(conn: Any, func: Callable[..., dict[str, Any]]) -> None:
     try:
         signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
         _limit_threads()
+        keep_freed_memory()  # a process of meshplan's own, running scan after scan (see _memory)
         logging.getLogger().setLevel(logging.WARNING)
         while True:
             msg = conn.recv()

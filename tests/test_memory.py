@@ -1,0 +1,60 @@
+"""The command's allocator settings (meshplan._memory): freed arrays are kept for reuse."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import pytest
+
+pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="glibc's malloc on Linux only")
+
+#: Resident memory (bytes) a 20 MiB array leaves behind once freed, printed by a fresh interpreter.
+_CHILD = """
+import os, sys
+import numpy as np
+from meshplan._memory import keep_freed_memory
+if sys.argv[1] == "keep":
+    assert keep_freed_memory()
+def rss():
+    return int(open("/proc/self/statm").read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
+a = np.ones(20 * 2**20 // 8)
+before = rss()
+del a
+print(before - rss())
+"""
+
+
+def _released_bytes(mode: str, env: dict[str, str] | None = None) -> int:
+    out = subprocess.run([sys.executable, "-c", _CHILD, mode], capture_output=True, text=True, check=True, env=env)
+    return int(out.stdout.strip())
+
+
+def _glibc() -> bool:
+    import ctypes
+
+    return hasattr(ctypes.CDLL(None), "gnu_get_libc_version")
+
+
+@pytest.mark.skipif(not _glibc(), reason="glibc only")
+def test_a_freed_array_is_kept_for_the_next_one() -> None:
+    # by default glibc maps a 20 MiB block on its own and returns it to the kernel when freed;
+    # once kept, the next arrays reuse those pages instead of faulting new ones in
+    assert _released_bytes("default") >= 16 * 2**20
+    assert _released_bytes("keep") <= 2 * 2**20
+
+
+@pytest.mark.skipif(not _glibc(), reason="glibc only")
+def test_the_users_own_allocator_settings_are_left_alone(monkeypatch: pytest.MonkeyPatch) -> None:
+    from meshplan._memory import keep_freed_memory
+
+    monkeypatch.setenv("MALLOC_MMAP_THRESHOLD_", "131072")
+    assert keep_freed_memory() is False
+
+
+@pytest.mark.skipif(not _glibc(), reason="glibc only")
+def test_the_command_keeps_freed_memory() -> None:
+    # loaded as the ``meshplan`` program, the command line sets the allocator up itself
+    child = _CHILD.replace("from meshplan._memory import keep_freed_memory", "sys.argv[0] = 'meshplan'; import meshplan.cli")
+    out = subprocess.run([sys.executable, "-c", child, "command"], capture_output=True, text=True, check=True)
+    assert int(out.stdout.strip()) <= 2 * 2**20
