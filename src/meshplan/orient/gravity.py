@@ -427,26 +427,27 @@ def _refine_kmeans(normals: FloatArray, areas: FloatArray, rough: FloatArray, co
     previous one (plus a 2 degree margin), which changes nothing unless the centre moves by more
     than the margin, and makes the narrow cones cheap.
     """
+    from .._kernels import cone_sum, fold_near_axis, keep_in_cone  # numba: loaded when first needed
+
+    # one compiled pass per round over the cone's candidates, in place (numpy's product, mask,
+    # masked sum and comparison with the last round were four passes and as many temporaries:
+    # 45 ms at 300k faces); the sums run row by row, so g moves by rounding alone
     g = unit(rough)
-    dots = normals @ g
-    cand = np.flatnonzero(np.abs(dots) >= np.cos(np.radians(cones_deg[0] + 10.0)))
-    n = np.ascontiguousarray(normals[cand] * np.sign(dots[cand])[:, None])
-    a = areas[cand]
+    n, a = fold_near_axis(np.ascontiguousarray(normals, dtype=np.float64), np.ascontiguousarray(areas, dtype=np.float64), g, np.cos(np.radians(cones_deg[0] + 10.0)))
+    m = len(a)
+    sel = np.zeros(m, dtype=np.bool_)
     used = 0
     for cone in cones_deg:
         cos_c = np.cos(np.radians(cone))
-        previous = None
-        for _ in range(10):
-            sel = n @ g >= cos_c
-            if not sel.any():
+        for round_ in range(10):
+            total, count, changed = cone_sum(n, a, m, g, cos_c, sel)
+            if count == 0:
                 return g, 0
-            if previous is not None and np.array_equal(sel, previous):
+            if round_ > 0 and not changed:
                 break
-            g = unit(np.where(sel, a, 0.0) @ n)  # no copy of the selected rows
-            previous = sel
-        used = int(sel.sum())
-        keep = n @ g >= np.cos(np.radians(cone + 2.0))
-        n, a = n[keep], a[keep]
+            g = unit(total)
+        used = count
+        m = keep_in_cone(n, a, m, g, np.cos(np.radians(cone + 2.0)))
     return g, used
 
 
