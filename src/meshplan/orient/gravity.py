@@ -442,7 +442,8 @@ def _refine_kmeans(normals: FloatArray, areas: FloatArray, rough: FloatArray, co
     # masked sum and comparison with the last round were four passes and as many temporaries:
     # 45 ms at 300k faces); the sums run row by row, so g moves by rounding alone
     g = unit(rough)
-    n, a = fold_near_axis(np.ascontiguousarray(normals, dtype=np.float64), np.ascontiguousarray(areas, dtype=np.float64), g, np.cos(np.radians(cones_deg[0] + 10.0)))
+    normals, areas = np.ascontiguousarray(normals, dtype=np.float64), np.ascontiguousarray(areas, dtype=np.float64)
+    n, a = fold_near_axis(normals, areas, g, np.cos(np.radians(cones_deg[0] + 10.0)))
     m = len(a)
     sel = np.zeros(m, dtype=np.bool_)
     used = 0
