@@ -227,7 +227,7 @@ def test_a_window_whose_head_was_not_scanned_is_found_from_its_sill_and_jambs():
 # ------------------------------------------------------------- leaves in doorways, heads unseen
 
 
-def _two_rooms(doorway: str, leaf_top_m: float = 1.6):
+def _two_rooms(doorway: str, leaf_top_m: float = 1.6, ajar_deg: float = 20.0):
     """Two rooms 6 m wide, z 0-4 and 4.12-8, on either side of a 12 cm partition, their walls
     scanned from the floor up to 1.6 m only and no ceiling (a user who never looks up: the hard
     synthetic preset), with a doorway at x 2-2.9 in the partition:
@@ -237,8 +237,11 @@ def _two_rooms(doorway: str, leaf_top_m: float = 1.6):
     * ``strip``: the near face not scanned at x 2-2.9 (a missing strip), the far face whole;
     * ``open``: open, its 4 cm leaf standing square to the wall in the near room, hinged at
       x = 2: the leaf's edge lies in the near face's plane beside the jamb's reveal;
-    * ``ajar``: the leaf open by 20 degrees only: its faces beside the hinge lie in the slab in
-      front of the near face, within 8 cm of it over 22 cm.
+    * ``ajar``: the leaf open by ``ajar_deg`` only (20 degrees: its faces beside the hinge lie
+      in the slab in front of the near face, within 8 cm of it over 22 cm; 5 degrees: all of it
+      does, filling the doorway's slab);
+    * ``in``: the leaf hinged at the far face's jamb at x = 2.9, open by ``ajar_deg`` towards the
+      near room: it lies within the wall's depth, across the doorway.
 
     Returns the flat walls and the openings found."""
     from meshplan.orient import orient
@@ -274,11 +277,20 @@ def _two_rooms(doorway: str, leaf_top_m: float = 1.6):
     elif doorway == "ajar":  # reveals through the wall, the leaf open 20 degrees into the near room
         b.quad([x0, 0, d], [0, h, 0], [0, 0, t])
         b.quad([x1, 0, d], [0, 0, t], [0, h, 0])
-        a = np.radians(20.0)
+        a = np.radians(ajar_deg)
         along = (x1 - x0) * np.array([np.cos(a), 0.0, -np.sin(a)])
         across = 0.04 * np.array([np.sin(a), 0.0, np.cos(a)])  # the leaf's thickness, towards the wall
         b.quad([x0, 0, d], along, [0, h, 0])  # the side facing the near room
         b.quad(np.array([x0, 0, d]) + across, [0, h, 0], along)
+    elif doorway == "in":  # the leaf hinged at the far face's jamb, open ajar_deg towards the near room
+        b.quad([x0, 0, d], [0, h, 0], [0, 0, t])
+        b.quad([x1, 0, d], [0, 0, t], [0, h, 0])
+        a = np.radians(ajar_deg)
+        along = (x1 - x0 - 0.02) * np.array([-np.cos(a), 0.0, -np.sin(a)])
+        across = 0.04 * np.array([-np.sin(a), 0.0, np.cos(a)])  # towards the far room
+        hinge = np.array([x1 - 0.01, 0.0, far]) - across
+        b.quad(hinge, [0, leaf_top_m, 0], along)  # the side facing the near room
+        b.quad(hinge + across, along, [0, leaf_top_m, 0])
     else:  # open: reveals through the wall and the leaf square to it in the near room
         b.quad([x0, 0, d], [0, h, 0], [0, 0, t])
         b.quad([x1, 0, d], [0, 0, t], [0, h, 0])
@@ -337,6 +349,26 @@ def test_a_leaf_ajar_narrows_no_door() -> None:
     _, op = _two_rooms("ajar")
     assert list(op.kind) == ["door"]
     assert float(op.u_max[0] - op.u_min[0]) == pytest.approx(0.9, abs=0.02)
+
+
+@pytest.mark.parametrize("ajar_deg", [4.5, 5.5])
+def test_a_leaf_standing_ajar_across_its_doorway_is_a_door_not_a_wall(ajar_deg: float) -> None:
+    """A leaf open by a few degrees lies within the wall's depth all across the doorway (its free
+    end 7-9 cm off the far face's plane), in line with the wall within the scatter of a drifting
+    scan's pieces, and fills the slab of both faces: clustered on its own (a surface as long as
+    a door is wide, standing on the floor, no taller than a door), it is the door's leaf, neither
+    the faces' evidence nor a wall. (At 4.5 degrees the leaf's last 10 cm are clustered with the
+    near face, whose doorway is measured that much narrower; at 7 degrees the whole leaf is, and
+    no door is found.)"""
+    from meshplan.plan.openings import door_leaves
+
+    walls, op = _two_rooms("in", ajar_deg=ajar_deg)
+    assert list(op.kind) == ["door"]
+    assert 0.78 <= float(op.u_max[0] - op.u_min[0]) <= 0.93
+    leaves = door_leaves(walls, op)
+    assert leaves.sum() == 1
+    leaf = int(np.flatnonzero(leaves)[0])
+    assert 0.7 <= float(walls.u_max[leaf] - walls.u_min[leaf]) <= 0.95  # the leaf's clustered part
 
 
 @pytest.mark.parametrize("sill_m, window", [(0.9, True), (1.4, False)])

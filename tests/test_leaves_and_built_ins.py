@@ -65,6 +65,34 @@ def test_an_open_leaf_at_a_jamb_is_no_wall(angle_deg):
     assert door_leaves(walls, _door(walls, 1, u0, u1)).tolist() == [False, False, True]
 
 
+@pytest.mark.parametrize("angle_deg", [4.5, 7.0])
+def test_a_leaf_standing_ajar_in_its_doorway_is_no_wall(angle_deg):
+    """A 0.85 m leaf hinged at the door's jamb on the +z face, open a few degrees: it lies
+    within the wall's depth, across the doorway."""
+    a = np.radians(angle_deg)
+    hinge = np.array([2.85, 0.1])
+    tip = hinge + 0.83 * np.array([-np.cos(a), -np.sin(a)])
+    rows = [*PARTITION, _row(tip, hinge, (np.sin(a), -np.cos(a)))]
+    walls = _walls(rows)
+    u0, u1 = sorted((_tangent_u(walls, 1, 2.0), _tangent_u(walls, 1, 2.85)))
+    assert door_leaves(walls, _door(walls, 1, u0, u1)).tolist() == [False, False, True]
+
+
+def test_a_piece_of_a_drifting_wall_beside_a_door_is_no_leaf():
+    """A piece of the partition turned 5 degrees (a drifting scan) that stands beside the
+    doorway, not across it, is a wall, as is a piece only 1 degree off across it."""
+    a = np.radians(5.0)
+    start = np.array([1.15, 0.1])  # as long as a leaf, ending at the door's jamb
+    piece = [_row(start, start + 0.8 * np.array([np.cos(a), np.sin(a)]), (-np.sin(a), np.cos(a)))]
+    walls = _walls([*PARTITION, *piece])
+    u0, u1 = sorted((_tangent_u(walls, 1, 2.0), _tangent_u(walls, 1, 2.85)))
+    assert not door_leaves(walls, _door(walls, 1, u0, u1)).any()
+    b = np.radians(1.0)
+    flush = [_row(np.array([2.0, 0.1]), np.array([2.0, 0.1]) + 0.83 * np.array([np.cos(b), np.sin(b)]), (-np.sin(b), np.cos(b)))]
+    walls = _walls([*PARTITION, *flush])
+    assert not door_leaves(walls, _door(walls, 1, u0, u1)).any()
+
+
 def test_a_return_wall_beside_a_door_is_a_wall():
     """A 0.8 m wall square to the partition at the door's jamb that meets a wall across its far
     end (a closet's side) is a wall; without the door it is not even looked at."""

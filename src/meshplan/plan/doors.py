@@ -161,6 +161,20 @@ MAD_TO_SIGMA = 1.4826
 #: A face in the line of a door's wall (:func:`_in_line`) turns from it by at most this angle
 #: (degrees): the scatter of one wall's pieces on a drifting scan.
 COLLINEAR_DOOR_DEG = 10.0
+#: A surface turned from a face by this angle (degrees) or more, up to :data:`COLLINEAR_DOOR_DEG`,
+#: may be a door leaf standing ajar rather than a piece of the face's wall; below it a leaf is
+#: closed as far as a scan can tell (its free end 4 cm or less off the wall's plane across a
+#: 0.8 m door: a frame's depth and a scan's noise).
+AJAR_MIN_TURN_DEG = 3.0
+#: A leaf's surface, as the scan clusters it, runs past its door's width by at most this much
+#: (m): the rounded corner at its hinge and the frame beside it.
+AJAR_HINGE_M = 0.2
+#: A door leaf's thickness (m; 4 cm is the common hollow-core leaf): its far side lies that far
+#: behind the plane fitted to the side clustered as its surface.
+LEAF_THICKNESS_M = 0.04
+#: Faces within this distance (m) of an ajar leaf's plane, over its length, are the leaf's: its
+#: two faces 4 cm apart, their noise, and the plane fitted to the face scanned better.
+AJAR_LEAF_DEPTH_M = 0.07
 #: ... and its plane lies within ``collinear_m`` plus this much (m) of the face's own, either
 #: way: behind it the other side of the same wall (a partition's thickness); in front of it a
 #: piece of the same wall that a drifting scan set off its plane (the HoloLens office's wall
@@ -239,6 +253,7 @@ class WallEvidence:
         # mesh was clustered in, zero for faces in none: a segment's faces share its surface
         seg = walls.face_segment if len(walls.face_segment) == len(tri) else np.full(len(tri), -1, dtype=np.int64)
         self.segment_normal = np.zeros((len(tri), 2))
+        self.segment_offset = np.zeros(len(tri))
         if np.any(seg >= 0):
             ok = seg >= 0
             k = int(seg.max()) + 1
@@ -246,9 +261,51 @@ class WallEvidence:
             sums: FloatArray = np.stack([np.bincount(seg[ok], weights=w * self.normals[ok, j], minlength=k) for j in (0, 2)], axis=1)
             sn = sums / np.maximum(np.linalg.norm(sums, axis=1), 1e-12)[:, None]
             self.segment_normal[ok] = sn[seg[ok]]
+            # and the offset of its plane along that normal (area-weighted mean of its faces')
+            d = np.einsum("ij,ij->i", self.centroids[ok][:, [0, 2]], self.segment_normal[ok])
+            so = np.bincount(seg[ok], weights=w * d, minlength=k) / np.maximum(np.bincount(seg[ok], weights=w, minlength=k), 1e-12)
+            self.segment_offset[ok] = so[seg[ok]]
+        self.segment = seg
         self._cache: dict[tuple, tuple[FloatArray, IntArray, IntArray]] = {}
+        self._ajar: dict[int, tuple[FloatArray, FloatArray, float] | None] = {}
         self._panels: tuple[IntArray, IntArray] | None = None
         self._vertical_normals: FloatArray | None = None
+
+    def segment_distance(self, faces: IntArray) -> FloatArray:
+        """Distance (m) of each of ``faces``' centroids from the plane of the DBSCAN segment it
+        was clustered in (``inf`` for faces in none)."""
+        n = self.segment_normal[faces]
+        d = np.abs(np.einsum("ij,ij->i", self.centroids[faces][:, [0, 2]], n) - self.segment_offset[faces])
+        return np.where(self.segment[faces] >= 0, d, np.inf)
+
+    def ajar_leaf(self, segment: int, floor: float) -> tuple[FloatArray, FloatArray, float] | None:
+        """The DBSCAN ``segment`` as a door leaf: ``(centre, normal, half_length)`` of its plane in
+        plan (x, z), or ``None`` when it is not shaped like one. A leaf is as long along its plane
+        as a door is wide (``door_width_m``, plus up to :data:`AJAR_HINGE_M`; shorter pieces of
+        a wall, 0.2-0.55 m clustered on their own beside a window's jamb, have normals skewed by
+        the jamb's rounded edge), stands on the floor (its foot within ``opening_margin_m``) and
+        rises above every work surface as the wall beside it does
+        (:data:`HEAD_UNSEEN_MIN_TOP_M`; the wall under a window's sill does not), but not above
+        a door's head (:data:`DOOR_HEAD_MAX_M`; a drifting wall's piece runs up to the
+        ceiling)."""
+        if segment not in self._ajar:
+            faces = np.flatnonzero(self.segment == segment)
+            pts = self.tri[faces].reshape(-1, 3)
+            n = self.segment_normal[faces[0]]
+            t = np.array([-n[1], n[0]])
+            along = pts[:, [0, 2]] @ t
+            lo, hi = float(along.min()), float(along.max())
+            params = self.params
+            top = float(pts[:, 1].max())
+            leafy = (
+                params.door_width_m[0] <= hi - lo <= params.door_width_m[1] + AJAR_HINGE_M
+                and floor + HEAD_UNSEEN_MIN_TOP_M <= top <= floor + DOOR_HEAD_MAX_M
+                and float(pts[:, 1].min()) <= floor + params.opening_margin_m
+            )
+            w = self.mesh.face_areas[faces]
+            depth = float(np.average(self.centroids[faces][:, [0, 2]] @ n, weights=w)) if w.sum() > 0 else float(np.mean(pts[:, [0, 2]] @ n))
+            self._ajar[segment] = (depth * n + 0.5 * (lo + hi) * t, n, 0.5 * (hi - lo)) if leafy else None
+        return self._ajar[segment]
 
     def _sorted(self, key: tuple, w: int, faces: IntArray) -> tuple[FloatArray, IntArray, IntArray]:
         """``faces`` with a small reach and their centroids' position along face ``w``'s
@@ -464,7 +521,26 @@ def _gaps(ev: WallEvidence, w: int, floor: float, ceiling: float) -> list[Candid
     # little, whose faces near the hinge reach into the slab; a return) is no evidence of it
     seg_n = ev.segment_normal[cand]
     clustered = np.any(seg_n != 0.0, axis=1)
-    cand = cand[~clustered | (np.abs(seg_n @ walls.normal[w]) >= np.cos(np.radians(COLLINEAR_DOOR_DEG)))]
+    cos_turn = np.abs(seg_n @ walls.normal[w])
+    collinear = cos_turn >= np.cos(np.radians(COLLINEAR_DOOR_DEG))
+    # ... nor is a leaf standing ajar (a few degrees open, within the scatter of a drifting
+    # wall's pieces): a surface of its own, no longer than a door is wide and no taller
+    # (its far face may be clustered with the wall's other face, which it nearly continues:
+    # every face within a leaf's thickness of the leaf's plane, over its length, is the leaf)
+    ajar = clustered & collinear & (cos_turn < np.cos(np.radians(AJAR_MIN_TURN_DEG)))
+    for s in np.unique(ev.segment[cand[ajar]]):
+        plane = ev.ajar_leaf(int(s), floor)
+        if plane is not None:
+            centre, normal, half = plane
+            rel = ev.centroids[cand][:, [0, 2]] - centre
+            across, along = rel @ normal, rel @ np.array([-normal[1], normal[0]])
+            # a face of another surface lies nearer that surface's plane than the leaf's far
+            # side (the wall beside the hinge, which the leaf's plane passes within a few cm of)
+            nearer = np.abs(across) < ev.segment_distance(cand) + LEAF_THICKNESS_M
+            ajar_leaf = ((np.abs(across) <= AJAR_LEAF_DEPTH_M) & (np.abs(along) <= half) & nearer) | (ev.segment[cand] == s)
+            collinear &= ~ajar_leaf
+            clustered |= ajar_leaf
+    cand = cand[~clustered | collinear]
     tv = ev.tri[cand]
     d = tv @ n3 - off
     u = tv @ t3

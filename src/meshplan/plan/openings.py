@@ -32,7 +32,7 @@ from ..geometry import FloatArray, IntArray, Mesh
 from ..orient import Orientation
 from ..walls import FlatWalls, PhysicalWall, WallParams, physical_walls
 from ..walls.flat import segment_distances
-from .doors import EDGE_CELLS, LEAF_MIN_TURN_DEG, Candidate, WallEvidence, wall_candidates
+from .doors import AJAR_MIN_TURN_DEG, EDGE_CELLS, LEAF_MIN_TURN_DEG, Candidate, WallEvidence, wall_candidates
 from .params import PlanParams
 
 #: Two finds on parallel faces are one opening when their intervals along the wall overlap by
@@ -197,6 +197,11 @@ def find_openings(
 #: jamb of the door, on either face of the wall, and that flat wall stops 5-15 cm short of it
 #: where the scan rounds the corner between leaf and frame.
 LEAF_HINGE_M = 0.2
+#: A leaf standing ajar (turned from its wall by :data:`~meshplan.plan.doors.AJAR_MIN_TURN_DEG`
+#: up to :data:`LEAF_MIN_TURN_DEG`) lies within its wall's depth across at least this share of
+#: its door's width (cos 10 degrees, less the rounded corners at hinge and frame): a piece of a
+#: drifting wall beside the door does not.
+AJAR_SPAN_SHARE = 0.8
 #: A leaf's free end meets no other wall within this distance (m): a return wall or a closet's
 #: side beside a door, as short as a leaf, meets the wall across at its far end.
 LEAF_FREE_END_M = 0.15
@@ -219,7 +224,7 @@ def door_leaves(walls: FlatWalls, openings: Openings, params: PlanParams | None 
     if not len(walls) or not len(openings):
         return out
     start, end = walls.start, walls.end
-    cos_turn = np.cos(np.radians(LEAF_MIN_TURN_DEG))
+    cos_turn, cos_ajar = np.cos(np.radians(LEAF_MIN_TURN_DEG)), np.cos(np.radians(AJAR_MIN_TURN_DEG))
     front, back = params.opening_slab_m, params.opening_wall_depth_m + params.opening_slab_m
     for i in np.flatnonzero(np.array(openings.kind) == "door"):
         f = int(openings.wall[i])
@@ -229,11 +234,17 @@ def door_leaves(walls: FlatWalls, openings: Openings, params: PlanParams | None 
         jamb_s = np.array([u * t + (off + front) * n for u in (openings.u_min[i], openings.u_max[i])])
         jamb_e = np.array([u * t + (off - back) * n for u in (openings.u_min[i], openings.u_max[i])])
         story = walls.story == openings.story[i]
-        turned = np.abs(walls.normal @ n) < cos_turn
+        cos_n = np.abs(walls.normal @ n)
+        turned = cos_n < cos_turn
         # the door's own wall: parallel faces within its depth
         mid = 0.5 * (start + end)
-        own = ~turned & (mid @ n - off <= front + 1e-9) & (mid @ n - off >= -back - 1e-9)
-        cand = np.flatnonzero(story & turned & ~out)
+        within = (mid @ n - off <= front + 1e-9) & (mid @ n - off >= -back - 1e-9)
+        own = ~turned & within
+        # a leaf standing ajar lies in the doorway, across most of its width
+        lo_t, hi_t = np.minimum(start @ t, end @ t), np.maximum(start @ t, end @ t)
+        spans = np.minimum(hi_t, openings.u_max[i]) - np.maximum(lo_t, openings.u_min[i]) >= AJAR_SPAN_SHARE * width
+        ajar = ~turned & (cos_n < cos_ajar) & within & spans
+        cand = np.flatnonzero(story & (turned | ajar) & ~out)
         if not len(cand):
             continue
         hinge = segment_distances(start[cand], end[cand], jamb_s, jamb_e)  # (candidates, 2 jambs)
@@ -248,7 +259,7 @@ def door_leaves(walls: FlatWalls, openings: Openings, params: PlanParams | None 
             free = ends[int(np.argmax(reach))]
             # other walls the free end may meet: not the door's own wall, not a face parallel
             # to this one (the leaf's other face)
-            others = story & ~own & (np.abs(walls.normal @ walls.normal[L]) < cos_turn)
+            others = story & ~own & ~ajar & (np.abs(walls.normal @ walls.normal[L]) < cos_turn)
             if not np.any(segment_distances(free[None], free[None], start[others], end[others]) <= LEAF_FREE_END_M):
                 out[L] = True
     return out
