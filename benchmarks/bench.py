@@ -112,9 +112,11 @@ def scan(faces: int, preset: str = "apartment", seed: int = 1) -> Path:
 
 def in_process(path: Path, repeats: int = 3) -> None:
     import meshplan
+    from meshplan._memory import keep_freed_memory
     from meshplan.export import render_files
     from meshplan.slicing import plane_heights, slice_mesh
 
+    keep_freed_memory()  # the stages as the meshplan command runs them (see meshplan._memory)
     annotations = path.parent / "annotations.json"
     meshplan.run(path, annotations=annotations)  # warm up (numba cache, fonts)
     stages: dict[str, list[float]] = {}
