@@ -54,7 +54,8 @@ def test_the_users_own_allocator_settings_are_left_alone(monkeypatch: pytest.Mon
 
 @pytest.mark.skipif(not _glibc(), reason="glibc only")
 def test_the_command_keeps_freed_memory() -> None:
-    # loaded as the ``meshplan`` program, the command line sets the allocator up itself
+    # loaded as the ``meshplan`` program, the command line sets the allocator up itself (also
+    # when started with Ctrl-C ignored, as a shell's background job is: pytest may run so)
     child = _CHILD.replace("from meshplan._memory import keep_freed_memory", "sys.argv[0] = 'meshplan'; import meshplan.cli")
     out = subprocess.run([sys.executable, "-c", child, "command"], capture_output=True, text=True, check=True)
     assert int(out.stdout.strip()) <= 2 * 2**20

@@ -34,16 +34,14 @@ def _interrupted_while_starting(signum: int, frame: Any) -> None:
     os._exit(130)
 
 
-#: Loading as the ``meshplan`` program (the console script or ``python -m meshplan``) with
-#: Python's own Ctrl-C handler; a library importing this module keeps its handler.
-_STARTING = (
-    threading.current_thread() is threading.main_thread()
-    and signal.getsignal(signal.SIGINT) is signal.default_int_handler
-    and bool(sys.argv[:1])
-    and (Path(sys.argv[0]).name == "meshplan" or Path(sys.argv[0]).parts[-2:] == ("meshplan", "__main__.py"))
-)
+#: Loading as the ``meshplan`` program (the console script or ``python -m meshplan``).
+_PROGRAM = bool(sys.argv[:1]) and (Path(sys.argv[0]).name == "meshplan" or Path(sys.argv[0]).parts[-2:] == ("meshplan", "__main__.py"))
+#: ... with Python's own Ctrl-C handler; a library importing this module keeps its handler, and
+#: a program started with Ctrl-C ignored (``nohup``, a shell's background job) keeps ignoring it.
+_STARTING = _PROGRAM and threading.current_thread() is threading.main_thread() and signal.getsignal(signal.SIGINT) is signal.default_int_handler
 if _STARTING:
     signal.signal(signal.SIGINT, _interrupted_while_starting)
+if _PROGRAM:
     from ._memory import keep_freed_memory
 
     keep_freed_memory()  # before numpy allocates: every array of the run reuses freed memory
