@@ -124,15 +124,19 @@ def _model_jobs(result: Result) -> list[tuple]:
 
 def _early_jobs(oriented: Oriented) -> list[tuple]:
     """``(function, *arguments)`` of the drawings the oriented scan alone decides: each story's
-    pen-and-ink plan (slowest first), then those of :func:`_upright_jobs`."""
+    pen-and-ink plan (slowest first, :func:`_pen_jobs`), then those of :func:`_upright_jobs`."""
+    return _pen_jobs(oriented) + _upright_jobs(oriented.orientation, oriented.mesh, oriented.options.render)
+
+
+def _pen_jobs(oriented: Oriented) -> list[tuple]:
+    """``(function, *arguments)`` of each story's pen-and-ink plan."""
     o, params = oriented.orientation, oriented.options.render
     n = len(o.stories)
     scan, north = _title(oriented)
-    jobs: list[tuple] = [
+    return [
         (_pen_files, _drawn_slices(pen), ann, _sheet(oriented, story.index), params, n, ("png", "svg", "pdf"), scan, north)
         for story, pen, ann in zip(o.stories, oriented.pen_and_ink, oriented.story_annotations, strict=True)
     ]
-    return jobs + _upright_jobs(o, oriented.mesh, params)
 
 
 def _upright_jobs(orientation: Orientation, mesh: Mesh, params: RenderParams) -> list[tuple]:
@@ -491,7 +495,7 @@ def submit_early(pool: RenderPool | None, oriented: Oriented, upright: EarlyDraw
     if upright is None:
         jobs = _early_jobs(oriented)
         return EarlyDrawings(jobs, _submit(pool, jobs))
-    jobs = _early_jobs(oriented)[: len(oriented.orientation.stories)]  # the pen-and-ink plans
+    jobs = _pen_jobs(oriented)
     return EarlyDrawings(upright.jobs + jobs, upright.futures + _submit(pool, jobs))
 
 

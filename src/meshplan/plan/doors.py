@@ -253,7 +253,6 @@ class WallEvidence:
         # mesh was clustered in, zero for faces in none: a segment's faces share its surface
         seg = walls.face_segment if len(walls.face_segment) == len(tri) else np.full(len(tri), -1, dtype=np.int64)
         self.segment_normal = np.zeros((len(tri), 2))
-        self.segment_offset = np.zeros(len(tri))
         if np.any(seg >= 0):
             ok = seg >= 0
             k = int(seg.max()) + 1
@@ -261,21 +260,28 @@ class WallEvidence:
             sums: FloatArray = np.stack([np.bincount(seg[ok], weights=w * self.normals[ok, j], minlength=k) for j in (0, 2)], axis=1)
             sn = sums / np.maximum(np.linalg.norm(sums, axis=1), 1e-12)[:, None]
             self.segment_normal[ok] = sn[seg[ok]]
-            # and the offset of its plane along that normal (area-weighted mean of its faces')
-            d = np.einsum("ij,ij->i", self.centroids[ok][:, [0, 2]], self.segment_normal[ok])
-            so = np.bincount(seg[ok], weights=w * d, minlength=k) / np.maximum(np.bincount(seg[ok], weights=w, minlength=k), 1e-12)
-            self.segment_offset[ok] = so[seg[ok]]
         self.segment = seg
         self._cache: dict[tuple, tuple[FloatArray, IntArray, IntArray]] = {}
         self._ajar: dict[int, tuple[FloatArray, FloatArray, float] | None] = {}
+        self._segment_offset: FloatArray | None = None
         self._panels: tuple[IntArray, IntArray] | None = None
         self._vertical_normals: FloatArray | None = None
 
     def segment_distance(self, faces: IntArray) -> FloatArray:
         """Distance (m) of each of ``faces``' centroids from the plane of the DBSCAN segment it
-        was clustered in (``inf`` for faces in none)."""
+        was clustered in (``inf`` for faces in none). The planes' offsets along their normals
+        (area-weighted means of their faces') are computed once, for the first face that asks
+        (an ajar leaf's, :func:`_gaps`)."""
+        if self._segment_offset is None:
+            seg, ok = self.segment, self.segment >= 0
+            w = self.mesh.face_areas[ok]
+            d = np.einsum("ij,ij->i", self.centroids[ok][:, [0, 2]], self.segment_normal[ok])
+            k = int(seg.max()) + 1 if ok.any() else 0
+            per = np.bincount(seg[ok], weights=w * d, minlength=k) / np.maximum(np.bincount(seg[ok], weights=w, minlength=k), 1e-12)
+            self._segment_offset = np.zeros(len(seg))
+            self._segment_offset[ok] = per[seg[ok]]
         n = self.segment_normal[faces]
-        d = np.abs(np.einsum("ij,ij->i", self.centroids[faces][:, [0, 2]], n) - self.segment_offset[faces])
+        d = np.abs(np.einsum("ij,ij->i", self.centroids[faces][:, [0, 2]], n) - self._segment_offset[faces])
         return np.where(self.segment[faces] >= 0, d, np.inf)
 
     def ajar_leaf(self, segment: int, floor: float) -> tuple[FloatArray, FloatArray, float] | None:
@@ -528,18 +534,18 @@ def _gaps(ev: WallEvidence, w: int, floor: float, ceiling: float) -> list[Candid
     # (its far face may be clustered with the wall's other face, which it nearly continues:
     # every face within a leaf's thickness of the leaf's plane, over its length, is the leaf)
     ajar = clustered & collinear & (cos_turn < np.cos(np.radians(AJAR_MIN_TURN_DEG)))
-    for s in np.unique(ev.segment[cand[ajar]]):
-        plane = ev.ajar_leaf(int(s), floor)
-        if plane is not None:
-            centre, normal, half = plane
-            rel = ev.centroids[cand][:, [0, 2]] - centre
-            across, along = rel @ normal, rel @ np.array([-normal[1], normal[0]])
-            # a face of another surface lies nearer that surface's plane than the leaf's far
-            # side (the wall beside the hinge, which the leaf's plane passes within a few cm of)
-            nearer = np.abs(across) < ev.segment_distance(cand) + LEAF_THICKNESS_M
-            ajar_leaf = ((np.abs(across) <= AJAR_LEAF_DEPTH_M) & (np.abs(along) <= half) & nearer) | (ev.segment[cand] == s)
-            collinear &= ~ajar_leaf
-            clustered |= ajar_leaf
+    leaves = [(int(s), lp) for s in np.unique(ev.segment[cand[ajar]]) if (lp := ev.ajar_leaf(int(s), floor)) is not None]
+    if leaves:
+        xz, own_plane = ev.centroids[cand][:, [0, 2]], ev.segment_distance(cand)
+    for s, (centre, normal, half) in leaves:
+        rel = xz - centre
+        across, along = rel @ normal, rel @ np.array([-normal[1], normal[0]])
+        # a face of another surface lies nearer that surface's plane than the leaf's far side
+        # (the wall beside the hinge, which the leaf's plane passes within a few cm of)
+        nearer = np.abs(across) < own_plane + LEAF_THICKNESS_M
+        ajar_leaf = ((np.abs(across) <= AJAR_LEAF_DEPTH_M) & (np.abs(along) <= half) & nearer) | (ev.segment[cand] == s)
+        collinear &= ~ajar_leaf
+        clustered |= ajar_leaf
     cand = cand[~clustered | collinear]
     tv = ev.tri[cand]
     d = tv @ n3 - off
