@@ -258,3 +258,84 @@ def test_the_sides_of_a_wardrobe_against_a_wall_found_by_its_other_face_are_no_w
     # a stub of a partition 1.2 m long, or one side alone: walls
     assert not _pilasters([OTHER_FACE, _row((2.0, 2.8), (2.0, 4.0), (-1, 0)), _row((3.3, 2.8), (3.3, 4.0), (1, 0))], WallParams()).any()
     assert not _box_sides(rows[:2], np.zeros(2, bool), WallParams()).any()
+
+
+def test_a_closed_leaf_within_a_wall_is_no_wall_of_its_own():
+    """A closed leaf set back 4 cm in its frame (x 2-2.85) is a face within the partition's
+    depth, nearer its far face (6 cm) than the near face is (10 cm): the two long faces still
+    make the wall, 10 cm thick, and the leaf belongs to it. Before, the thinnest pair was taken
+    first: the leaf and the far face made a 6 cm wall, and the near face one of the default
+    thickness, two walls in one."""
+    from meshplan.walls.physical import physical_walls
+
+    leaf = _row((2.0, 0.04), (2.85, 0.04), (0, -1))
+    walls = _walls([*PARTITION, leaf])
+    (wall,) = physical_walls(walls, max_thickness_m=0.5, default_thickness_m=0.15)
+    assert wall.paired and wall.thickness == pytest.approx(0.1)
+    assert sorted(wall.faces) == [0, 1, 2]
+    assert wall.start[1] == pytest.approx(0.05) and wall.end[1] == pytest.approx(0.05)
+
+
+def _leaf_near(hinge, angle_deg: float, side: int, thickness_m: float = 0.04, length_m: float = 0.83):
+    """The faces of a leaf standing in PARTITION's door (x 2-2.85), hinged at plan point
+    ``hinge`` on the jamb at x 2.85 and opened by ``angle_deg`` towards ``side`` (+1: +z, the
+    side face 1 looks at), as :func:`meshplan.plan.elements.door_leaf` reads them: both faces,
+    10 x 10 cm patches from 0.35 to 1.75 m, the leaf turning about the corner of its face flush
+    with the wall."""
+    from meshplan.plan.elements import _Near
+
+    a = np.radians(angle_deg)
+    d = np.array([-np.cos(a), side * np.sin(a)])  # from the hinge (x 2.85) across the doorway
+    perp = np.array([d[1], -d[0]]) * (1 if side > 0 else -1)  # into the leaf's body, away from the side it opens to
+    perp = -perp if perp @ np.array([0.0, side]) > 0 else perp
+    s = np.arange(0.05, length_m, 0.1)
+    y = np.arange(0.35, 1.75, 0.1)
+    xz, normal = [], []
+    for off in (0.0, thickness_m):
+        for si in s:
+            xz += [np.asarray(hinge) + si * d + off * perp] * len(y)
+            normal += [(-perp if off == 0.0 else perp)] * len(y)
+    k = len(xz)
+    return _Near(np.array(xz), np.tile(y, 2 * len(s)), np.array(normal), np.full(k, 0.01))
+
+
+@pytest.mark.parametrize(
+    ("angle_deg", "side", "hinge_z"),
+    [
+        (5.0, -1, 0.0),  # ajar towards -z, hinged at the far face: within the wall's depth and 4 cm past it
+        (4.0, 1, 0.1),  # ajar towards +z, hinged at the near face
+        (110.0, 1, 0.1),  # opened past square, back over the wall
+        (35.0, 1, 0.1),
+    ],
+)
+def test_the_swing_of_a_leaf(angle_deg, side, hinge_z):
+    """door_leaf gives the side, hinge and angle of a leaf at any opening angle from 3 to 120
+    degrees. Before: a leaf ajar (3-10 degrees) showed the same share from both jambs and got
+    no swing; one opened past square was cut off at the jamb's line and reported at 80-87
+    degrees or not at all."""
+    from meshplan.plan.elements import door_leaf
+
+    walls = _walls(PARTITION)
+    u0, u1 = sorted((_tangent_u(walls, 1, 2.0), _tangent_u(walls, 1, 2.85)))
+    near = _leaf_near((2.85, hinge_z), angle_deg, side)
+    found = door_leaf(near, walls, 1, u0, u1, 0.1, 0.0)
+    assert found is not None
+    got_side, swing = found
+    assert got_side == side
+    assert np.hypot(swing.hinge[0] - 2.85, swing.hinge[1] - hinge_z) <= 0.03
+    assert swing.angle_deg == pytest.approx(angle_deg, abs=1.0)
+
+
+def test_the_hinge_in_a_wall_seen_from_one_side():
+    """An outer wall 25 cm thick seen from inside only (face 1, the default thickness 15 cm
+    assumed), its door opening outwards by 40 degrees: the hinge is where the leaf meets the
+    jamb, on the unseen outer face, not on the default one. Before: 10 cm off."""
+    from meshplan.plan.elements import door_leaf
+
+    walls = _walls(PARTITION[1:])
+    u0, u1 = sorted((_tangent_u(walls, 0, 2.0), _tangent_u(walls, 0, 2.85)))
+    near = _leaf_near((2.85, 0.1 - 0.25), 40.0, -1)
+    side, swing = door_leaf(near, walls, 0, u0, u1, 0.15, 0.0, paired=False)
+    assert side == -1
+    assert np.hypot(swing.hinge[0] - 2.85, swing.hinge[1] - (0.1 - 0.25)) <= 0.03
+    assert swing.angle_deg == pytest.approx(40.0, abs=1.0)

@@ -132,6 +132,27 @@ LEAF_MIN_SHARE = 0.3
 #: A 4 cm leaf standing in the opening narrows it by this much (m): the clear width is measured
 #: to the open leaf's face.
 LEAF_THICKNESS_M = 0.04
+#: A leaf opened past square stands back over its own wall; it is still a leaf up to this angle
+#: (degrees): doors stop at 90-120 degrees on their stop or the wall behind them, and beyond
+#: that a leaf lies along the wall, where it cannot be told from it.
+LEAF_MAX_OPEN_DEG = 120.0
+#: The direction of a leaf is the line fitted through its faces when they lie this close to it
+#: (m, rms; the two faces of a 4 cm leaf are 2 cm off its middle), else the mean of the rays
+#: from the hinge to them. The fitted line also places the hinge in a wall whose far face was
+#: not scanned (its thickness is the default), where the line meets the jamb, as long as the
+#: leaf stands at most :data:`LEAF_FIT_HINGE_MAX_DEG` open (beyond, that meeting point moves by
+#: 2-4 cm for each degree of error in the line).
+LEAF_FIT_RMS_M = 0.03
+LEAF_FIT_HINGE_MAX_DEG = 75.0
+#: A leaf standing ajar, within a few degrees of its closed position (from
+#: :data:`~meshplan.plan.doors.AJAR_MIN_TURN_DEG` to :data:`AJAR_MAX_TURN_DEG`), hardly leaves
+#: the wall's depth and looks the same seen from either jamb; it is the line fitted through the
+#: faces standing in the doorway (within the wall's depth and this far (m) beyond either face),
+#: spanning at least :data:`AJAR_LEAF_SPAN_SHARE` of the door, and its hinge is the end nearer
+#: the middle of the wall: a leaf closes into its frame, and the free end is the one that left.
+AJAR_MAX_TURN_DEG = 15.0
+AJAR_BEYOND_M = 0.25
+AJAR_LEAF_SPAN_SHARE = 0.8
 
 
 # --------------------------------------------------------------------------------------------
@@ -502,10 +523,74 @@ def _hole_seen(near: _Near, walls: FlatWalls, face: int, u0: float, u1: float, b
     return float(near.area[sel].sum()) < HOLE_EMPTY_SHARE * (b - a) * (hi - lo)
 
 
-def door_leaf(near: _Near, walls: FlatWalls, face: int, u0: float, u1: float, thickness: float, floor: float) -> tuple[int, Swing] | None:
+def _hand(hinge: FloatArray, free: FloatArray, side: int, n: FloatArray) -> str:
+    """Which hand a door is (``left``/``right``): seen from the room it opens into (on ``side``
+    of the face with normal ``n``), facing the door, is the hinge left or right of the free end?"""
+    # right of the viewer = the viewer's direction turned clockwise on the page (x right, z
+    # down): (-d_z, d_x) for d = -side * n
+    look = -side * n
+    right = np.array([-look[1], look[0]])
+    return "right" if float((hinge - free) @ right) > 0 else "left"
+
+
+def _line_fit(p: FloatArray, normal: FloatArray, w: FloatArray) -> tuple[FloatArray, FloatArray, float]:
+    """The line of a panel's faces (plan points ``p``, horizontal normals ``normal``, weights
+    ``w``): ``(centroid, unit direction, rms distance of the points to the line)``. The
+    direction is square to the faces' mean normal (the two sides of a leaf flipped to agree),
+    not the points' principal axis, which tilts where one side of a leaf was seen further than
+    the other."""
+    c = np.average(p, axis=0, weights=w)
+    ref = normal[int(np.argmax(w))]
+    m = (normal * np.where(normal @ ref < 0, -1.0, 1.0)[:, None] * w[:, None]).sum(axis=0)
+    d = np.array([-m[1], m[0]]) / max(float(np.linalg.norm(m)), 1e-12)
+    q = p - c
+    across = q @ np.array([-d[1], d[0]])
+    return c, d, float(np.sqrt(np.average(across**2, weights=w)))
+
+
+def _ajar_leaf(near: _Near, band: np.ndarray, n: FloatArray, t: FloatArray, off: float, u0: float, u1: float, thickness: float) -> tuple[int, Swing] | None:
+    """A leaf standing ajar in the doorway ``[u0, u1]`` (:data:`AJAR_MAX_TURN_DEG`): ``(side,
+    swing)`` as :func:`door_leaf` gives, or ``None``."""
+    from .doors import AJAR_MIN_TURN_DEG
+
+    width = u1 - u0
+    u = near.xz @ t
+    a = near.xz @ n - off
+    cos_max = np.cos(np.radians(AJAR_MAX_TURN_DEG))
+    sel = band & (u >= u0) & (u <= u1) & (a >= -thickness - AJAR_BEYOND_M) & (a <= AJAR_BEYOND_M) & (np.abs(near.normal @ n) >= cos_max)
+    if not sel.any():
+        return None
+    us, as_, w = u[sel], a[sel], near.area[sel]
+    if float(w.sum()) < LEAF_MIN_SHARE * width * (LEAF_BAND_M[1] - LEAF_BAND_M[0]) or float(us.max() - us.min()) < AJAR_LEAF_SPAN_SHARE * width:
+        return None
+    slope, icpt = np.polyfit(us, as_, 1, w=np.sqrt(w))
+    rms = float(np.sqrt(np.average((as_ - (icpt + slope * us)) ** 2, weights=w)))
+    angle = float(np.degrees(np.arctan(abs(slope))))
+    # every face standing in the doorway is fitted (the leaf's edges too): within a leaf's thickness
+    if rms > LEAF_THICKNESS_M or not AJAR_MIN_TURN_DEG <= angle <= AJAR_MAX_TURN_DEG:
+        return None
+    # the faces themselves must be turned that way (a closed leaf's noise fits no slope)
+    turn = np.degrees(np.arctan2(-(near.normal[sel] @ t) * np.sign(near.normal[sel] @ n), np.abs(near.normal[sel] @ n)))
+    if abs(float(np.average(turn, weights=w)) - float(np.degrees(np.arctan(slope)))) > AJAR_MIN_TURN_DEG:
+        return None
+    ends = (u0, icpt + slope * u0), (u1, icpt + slope * u1)
+    middle = -thickness / 2
+    free, hinge_end = sorted(ends, key=lambda e: -abs(e[1] - middle))
+    side = 1 if free[1] > hinge_end[1] else -1
+    hinge = hinge_end[0] * t + (off + hinge_end[1]) * n
+    tip = free[0] * t + (off + free[1]) * n
+    return side, Swing((float(hinge[0]), float(hinge[1])), _hand(hinge, tip, side, n), angle)
+
+
+def door_leaf(
+    near: _Near, walls: FlatWalls, face: int, u0: float, u1: float, thickness: float, floor: float, paired: bool = True
+) -> tuple[int, Swing] | None:
     """The open leaf of a door ``[u0, u1]`` in face ``face`` of a wall ``thickness`` thick, if
     the scan shows it: ``(side, swing)`` with side +1 towards the face's normal, -1 beyond the
-    wall; ``None`` when no leaf stands out (:data:`LEAF_MIN_SHARE`)."""
+    wall; ``None`` when no leaf stands out (:data:`LEAF_MIN_SHARE`). ``paired``: the wall's
+    thickness was measured (else the far face's plane is a default, and the hinge on it is
+    placed from the leaf, :data:`LEAF_FIT_HINGE_MAX_DEG`). A leaf standing ajar is found by
+    :func:`_ajar_leaf`."""
     n, t, off = walls.normal[face], walls.tangent[face], walls.offset[face]
     width = u1 - u0
     xz = near.xz
@@ -517,7 +602,7 @@ def door_leaf(near: _Near, walls: FlatWalls, face: int, u0: float, u1: float, th
     p = xz[idx]
     nrm = near.normal[idx]
     area = near.area[idx]
-    scores = []
+    geometry = []
     for side in (1, -1):
         plane = off if side > 0 else off - thickness  # the face the leaf swings out of
         for u_h in (u0, u1):
@@ -529,29 +614,49 @@ def door_leaf(near: _Near, walls: FlatWalls, face: int, u0: float, u1: float, th
             with np.errstate(invalid="ignore", divide="ignore"):
                 cosr = np.abs(np.einsum("ij,ij->i", nrm, ray)) / np.maximum(dist, 1e-9)
             ok &= cosr <= LEAF_RAY_COS
-            # towards the opening's side of the hinge (a leaf covers the doorway when closed)
-            inward = (ray @ t) * (1 if u_h == u0 else -1) >= -0.05
-            ok &= inward
-            share = float(area[ok].sum()) / (width * (LEAF_BAND_M[1] - LEAF_BAND_M[0]))
-            angle = 0.0
-            if ok.any():
-                across = np.average((ray[ok] @ n) * side, weights=area[ok])
-                along = np.average(np.abs(ray[ok] @ t), weights=area[ok])
-                angle = float(np.degrees(np.arctan2(across, along)))
-            scores.append((share, side, u_h, hinge, angle))
-    scores.sort(key=lambda s: -s[0])
-    best, second = scores[0], scores[1]
-    if best[0] < LEAF_MIN_SHARE or best[0] < 2 * second[0]:
-        return None
-    share, side, u_h, hinge, angle = best
-    # seen from the room it opens into, facing the door (looking along -side * n): is the
-    # hinge on the left? right of the viewer = the viewer's direction turned clockwise on the
-    # page (x right, z down): (-d_z, d_x) for d = -side * n
-    look = -side * n
-    right = np.array([-look[1], look[0]])
+            along = (ray @ t) * (1 if u_h == u0 else -1)  # towards the door's other jamb
+            geometry.append((side, u_h, hinge, ok, along, dist))
+    # a leaf within square first (it covers the doorway when closed); only where none is seen,
+    # one opened past square, back over its wall: there it looks like the return of a wall
+    # beside the jamb, which a door next to a corner has
+    for max_open_deg in (90.0, LEAF_MAX_OPEN_DEG):
+        scores = []
+        for side, u_h, hinge, ok, along, dist in geometry:
+            ok = ok & (along >= dist * np.cos(np.radians(max_open_deg)) - 0.05)
+            scores.append((float(area[ok].sum()) / (width * (LEAF_BAND_M[1] - LEAF_BAND_M[0])), side, u_h, hinge, ok, along))
+        scores.sort(key=lambda s: -s[0])
+        best, second = scores[0], scores[1]
+        if best[0] >= LEAF_MIN_SHARE and best[0] >= 2 * second[0]:
+            break
+    else:
+        return _ajar_leaf(near, band, n, t, off, u0, u1, thickness)
+    share, side, u_h, hinge, ok, along = best
+    ray = p[ok] - hinge
+    # the leaf's direction: the area-weighted median of the rays from the hinge (most of the
+    # area is the leaf's; a wall or another leaf nearby is a minority), then the line fitted
+    # through the faces near that ray
+    each = np.arctan2((ray @ n) * side, along[ok])
+    order = np.argsort(each)
+    cum = np.cumsum(area[ok][order])
+    angle = float(np.degrees(each[order][np.searchsorted(cum, 0.5 * cum[-1])]))
+    sign_t = 1 if u_h == u0 else -1
+    d0 = np.cos(np.radians(angle)) * sign_t * t + np.sin(np.radians(angle)) * side * n
+    keep = np.abs(ray @ np.array([-d0[1], d0[0]])) <= 2 * LEAF_FIT_RMS_M
+    if keep.sum() >= 3:
+        c, d, rms = _line_fit(p[ok][keep], nrm[ok][keep], area[ok][keep])
+        if rms <= LEAF_FIT_RMS_M:
+            d = d if float(d @ d0) >= 0 else -d  # from the hinge to the leaf
+            fitted = float(np.degrees(np.arctan2(float(d @ n) * side, float(d @ t) * sign_t)))
+            if not paired and side < 0 and 0.0 < fitted <= LEAF_FIT_HINGE_MAX_DEG:
+                # the far face was not scanned: the hinge is where the leaf meets the jamb. The
+                # leaf turns about the corner of its face flush with the wall's face when closed:
+                # its middle line meets the jamb half a leaf's thickness / cos(angle) short of it
+                s_j = (u_h - float(c @ t)) / float(d @ t)
+                hinge = c + s_j * d + side * n * (LEAF_THICKNESS_M / 2) / np.cos(np.radians(fitted))
+            angle = fitted
     other = u1 if u_h == u0 else u0
-    hand = "right" if float((hinge - (other * t + (off if side > 0 else off - thickness) * n)) @ right) > 0 else "left"
-    return side, Swing((float(hinge[0]), float(hinge[1])), hand, angle)
+    plane_h = float(hinge @ n)
+    return side, Swing((float(hinge[0]), float(hinge[1])), _hand(hinge, other * t + plane_h * n, side, n), angle)
 
 
 def opening_elements(
@@ -600,7 +705,7 @@ def opening_elements(
         swing = None
         opens_to: int | str | None = None
         if kind == "door":
-            leaf = door_leaf(near, walls, f, float(openings.u_min[i]), float(openings.u_max[i]), thickness, story.floor)
+            leaf = door_leaf(near, walls, f, float(openings.u_min[i]), float(openings.u_max[i]), thickness, story.floor, pw.paired if pw is not None else True)
             if leaf is not None:
                 side, swing = leaf
                 opens_to = sides[0] if side > 0 else sides[1]

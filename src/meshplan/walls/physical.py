@@ -67,6 +67,10 @@ class PhysicalWall:
 #: the scatter of the planes fitted to pieces of one wall face (plaster, scan noise, 1-2 cm).
 COPLANAR_M = 0.03
 
+#: Pairs of faces are taken by the length they share, in steps of this (m; then the thinnest
+#: first): lengths closer than a scan's ragged face ends count as equal.
+PAIR_OVERLAP_STEP_M = 0.25
+
 #: How far a wall end moves to meet another wall (m; :func:`join_walls`): the 0.1-0.2 m that
 #: headset meshes bevel off a corner plus half of the thickest wall (0.2 m, ``max_thickness_m``),
 #: well below the shortest wall kept, so an end never jumps to a wall across a room or a door.
@@ -108,10 +112,13 @@ def physical_walls(walls: FlatWalls, max_thickness_m: float, default_thickness_m
             ub = sorted((walls.start[b] @ tan[a], walls.end[b] @ tan[a]))
             overlap = min(ua[1], ub[1]) - max(ua[0], ub[0])
             if overlap >= 0.5 * min(ua[1] - ua[0], ub[1] - ub[0]) and overlap > 0:
-                candidates.append((gap, a, b))
+                candidates.append((-round(overlap / PAIR_OVERLAP_STEP_M), gap, a, b))
     used = np.zeros(n, dtype=bool)
     groups: list[tuple[list[int], list[int], float]] = []  # (faces of side a, of side b, gap)
-    for gap, a, b in sorted(candidates):
+    # the pairs sharing the longest stretch first (then the thinnest): a short face standing
+    # within a wall's depth (a closed leaf in its frame, the back of a niche) is nearer to
+    # either side than the other side is, but shares less of its length
+    for _, gap, a, b in sorted(candidates):
         if used[a] or used[b]:
             continue
         used[a] = used[b] = True
@@ -132,6 +139,22 @@ def physical_walls(walls: FlatWalls, max_thickness_m: float, default_thickness_m
                     used[c] = True
                     break
             if used[c]:
+                break
+    # ... and so does a face standing within its depth along it (a closed leaf set back in its
+    # frame, the back of a niche): it is no wall of its own
+    for c in map(int, np.flatnonzero(~used)):
+        for side_a, side_b, gap in groups:
+            f = side_a[0]
+            if walls.story[c] != walls.story[f] or abs(nor[c] @ nor[f]) < 0.99:
+                continue
+            depth = off[f] - nor[f] @ (nor[c] * off[c])  # how far c's plane lies behind f's
+            if not COPLANAR_M < depth < gap - COPLANAR_M:
+                continue
+            uc = sorted((walls.start[c] @ tan[f], walls.end[c] @ tan[f]))
+            ug = [u for g in side_a + side_b for u in (walls.start[g] @ tan[f], walls.end[g] @ tan[f])]
+            if uc[0] >= min(ug) - COPLANAR_M and uc[1] <= max(ug) + COPLANAR_M:
+                (side_a if nor[c] @ nor[f] > 0 else side_b).append(c)
+                used[c] = True
                 break
     out = []
     for side_a, side_b, gap in groups:
