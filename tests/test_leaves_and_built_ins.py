@@ -65,6 +65,21 @@ def test_an_open_leaf_at_a_jamb_is_no_wall(angle_deg):
     assert door_leaves(walls, _door(walls, 1, u0, u1)).tolist() == [False, False, True]
 
 
+def test_a_piece_of_a_leaf_by_its_hinge_is_no_wall():
+    """A leaf open 60 degrees and a 0.4 m piece of it by the hinge clustered apart at 45 degrees
+    (hard seed 3: the corner between leaf and frame), whose far end lies 11 cm from the leaf's
+    face: both are the leaf. Before, the piece's end met "another wall", the leaf, and the piece
+    stayed a wall (0.44 m drawn across the room)."""
+    hinge = np.array([2.0, 0.15])
+    a, b = np.radians(60.0), np.radians(45.0)
+    leaf = _row(hinge, hinge + 0.85 * np.array([np.cos(a), np.sin(a)]), (np.sin(a), -np.cos(a)))
+    start = hinge + 0.02
+    piece = _row(start, start + 0.4 * np.array([np.cos(b), np.sin(b)]), (np.sin(b), -np.cos(b)))
+    walls = _walls([*PARTITION, piece, leaf])  # the piece first: it is judged before the leaf
+    u0, u1 = sorted((_tangent_u(walls, 1, 2.0), _tangent_u(walls, 1, 2.85)))
+    assert door_leaves(walls, _door(walls, 1, u0, u1)).tolist() == [False, False, True, True]
+
+
 @pytest.mark.parametrize("angle_deg", [4.5, 7.0])
 def test_a_leaf_standing_ajar_in_its_doorway_is_no_wall(angle_deg):
     """A 0.85 m leaf hinged at the door's jamb on the +z face, open a few degrees: it lies

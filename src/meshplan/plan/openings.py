@@ -216,8 +216,8 @@ def door_leaves(walls: FlatWalls, openings: Openings, params: PlanParams | None 
     that wall, passes within :data:`LEAF_HINGE_M` of one of the door's jambs (the line across
     the wall's depth at either side of the door, where the hinge stands on one face), lies
     within the door's width of that jamb (inside the leaf's swing), and its end away from the
-    jamb meets no other wall (:data:`LEAF_FREE_END_M`): a short return or a closet's side beside
-    a door meets the wall across.
+    jamb meets no other wall (:data:`LEAF_FREE_END_M`; a leaf already found is none): a short
+    return or a closet's side beside a door meets the wall across.
     """
     params = params or PlanParams()
     out = np.zeros(len(walls), dtype=bool)
@@ -248,7 +248,11 @@ def door_leaves(walls: FlatWalls, openings: Openings, params: PlanParams | None 
         if not len(cand):
             continue
         hinge = segment_distances(start[cand], end[cand], jamb_s, jamb_e)  # (candidates, 2 jambs)
-        for k, L in enumerate(cand):
+        # twice: a piece of a leaf whose end meets the leaf's main face (the corner at its
+        # hinge, clustered apart) is taken once that face is known to be a leaf
+        for k, L in [*enumerate(cand), *enumerate(cand)]:
+            if out[L]:
+                continue
             j = int(np.argmin(hinge[k]))
             if hinge[k, j] > LEAF_HINGE_M:
                 continue
@@ -259,7 +263,7 @@ def door_leaves(walls: FlatWalls, openings: Openings, params: PlanParams | None 
             free = ends[int(np.argmax(reach))]
             # other walls the free end may meet: not the door's own wall, not a face parallel
             # to this one (the leaf's other face)
-            others = story & ~own & ~ajar & (np.abs(walls.normal @ walls.normal[L]) < cos_turn)
+            others = story & ~own & ~ajar & ~out & (np.abs(walls.normal @ walls.normal[L]) < cos_turn)
             if not np.any(segment_distances(free[None], free[None], start[others], end[others]) <= LEAF_FREE_END_M):
                 out[L] = True
     return out
