@@ -170,7 +170,8 @@ AJAR_MIN_TURN_DEG = 3.0
 #: (m): the rounded corner at its hinge and the frame beside it.
 AJAR_HINGE_M = 0.2
 #: A door leaf's thickness (m; 4 cm is the common hollow-core leaf): its far side lies that far
-#: behind the plane fitted to the side clustered as its surface.
+#: behind the plane fitted to the side clustered as its surface, and an open leaf standing in
+#: its doorway narrows it by as much (:mod:`meshplan.plan.elements`' clear width).
 LEAF_THICKNESS_M = 0.04
 #: Faces within this distance (m) of an ajar leaf's plane, over its length, are the leaf's: its
 #: two faces 4 cm apart, their noise, and the plane fitted to the face scanned better.

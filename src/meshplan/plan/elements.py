@@ -48,6 +48,7 @@ from ..geometry import FloatArray, Mesh
 from ..orient import Story
 from ..walls import FlatWalls, PhysicalWall
 from ..walls.physical import wall_of_face
+from .doors import AJAR_MIN_TURN_DEG, LEAF_THICKNESS_M
 from .draft import DraftingPlan
 from .openings import Openings
 from .params import PlanParams
@@ -129,9 +130,6 @@ LEAF_RAY_COS = 0.3
 #: A leaf is seen when its faces cover at least this share of one side of it (a 4 cm leaf shows
 #: up to both sides, 2.0), and at least twice what any other (hinge, side) shows.
 LEAF_MIN_SHARE = 0.3
-#: A 4 cm leaf standing in the opening narrows it by this much (m): the clear width is measured
-#: to the open leaf's face.
-LEAF_THICKNESS_M = 0.04
 #: A leaf opened past square stands back over its own wall; it is still a leaf up to this angle
 #: (degrees): doors stop at 90-120 degrees on their stop or the wall behind them, and beyond
 #: that a leaf lies along the wall, where it cannot be told from it.
@@ -533,7 +531,7 @@ def _hand(hinge: FloatArray, free: FloatArray, side: int, n: FloatArray) -> str:
     return "right" if float((hinge - free) @ right) > 0 else "left"
 
 
-def _line_fit(p: FloatArray, normal: FloatArray, w: FloatArray) -> tuple[FloatArray, FloatArray, float]:
+def _panel_line(p: FloatArray, normal: FloatArray, w: FloatArray) -> tuple[FloatArray, FloatArray, float]:
     """The line of a panel's faces (plan points ``p``, horizontal normals ``normal``, weights
     ``w``): ``(centroid, unit direction, rms distance of the points to the line)``. The
     direction is square to the faces' mean normal (the two sides of a leaf flipped to agree),
@@ -551,8 +549,6 @@ def _line_fit(p: FloatArray, normal: FloatArray, w: FloatArray) -> tuple[FloatAr
 def _ajar_leaf(near: _Near, band: np.ndarray, n: FloatArray, t: FloatArray, off: float, u0: float, u1: float, thickness: float) -> tuple[int, Swing] | None:
     """A leaf standing ajar in the doorway ``[u0, u1]`` (:data:`AJAR_MAX_TURN_DEG`): ``(side,
     swing)`` as :func:`door_leaf` gives, or ``None``."""
-    from .doors import AJAR_MIN_TURN_DEG
-
     width = u1 - u0
     u = near.xz @ t
     a = near.xz @ n - off
@@ -643,7 +639,7 @@ def door_leaf(
     d0 = np.cos(np.radians(angle)) * sign_t * t + np.sin(np.radians(angle)) * side * n
     keep = np.abs(ray @ np.array([-d0[1], d0[0]])) <= 2 * LEAF_FIT_RMS_M
     if keep.sum() >= 3:
-        c, d, rms = _line_fit(p[ok][keep], nrm[ok][keep], area[ok][keep])
+        c, d, rms = _panel_line(p[ok][keep], nrm[ok][keep], area[ok][keep])
         if rms <= LEAF_FIT_RMS_M:
             d = d if float(d @ d0) >= 0 else -d  # from the hinge to the leaf
             fitted = float(np.degrees(np.arctan2(float(d @ n) * side, float(d @ t) * sign_t)))
@@ -709,7 +705,7 @@ def opening_elements(
             if leaf is not None:
                 side, swing = leaf
                 opens_to = sides[0] if side > 0 else sides[1]
-        clear = width - (LEAF_THICKNESS_M if swing is not None else 0.0)
+        clear = width - (LEAF_THICKNESS_M if swing is not None else 0.0)  # to the open leaf's face
         # confidence: the hole in how many faces of the wall, and plausible sizes
         cuts = openings.faces[i] if i < len(openings.faces) and openings.faces[i] else ()
         if not cuts:
