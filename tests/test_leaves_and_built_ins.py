@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from meshplan.plan.openings import LEAF_HINGE_M, Openings, door_leaves
-from meshplan.walls.flat import FlatWalls, _box_sides, _merge, _pilasters
+from meshplan.walls.flat import FlatWalls, _box_sides, _chords, _merge, _pilasters
 from meshplan.walls.params import WallParams
 
 
@@ -19,8 +19,16 @@ def _row(a, b, normal, story: int = 0) -> dict:
     t = np.array([-n[1], n[0]])
     ua, ub = float(np.dot(a, t)), float(np.dot(b, t))
     return {
-        "story": story, "direction": 0, "normal": (float(n[0]), float(n[1])), "offset": float(np.dot(a, n)),
-        "u_min": min(ua, ub), "u_max": max(ua, ub), "bottom": 0.0, "top": 2.0, "support": 100, "area": abs(ub - ua) * 2.0,
+        "story": story,
+        "direction": 0,
+        "normal": (float(n[0]), float(n[1])),
+        "offset": float(np.dot(a, n)),
+        "u_min": min(ua, ub),
+        "u_max": max(ua, ub),
+        "bottom": 0.0,
+        "top": 2.0,
+        "support": 100,
+        "area": abs(ub - ua) * 2.0,
         "segments": [],
     }
 
@@ -28,19 +36,33 @@ def _row(a, b, normal, story: int = 0) -> dict:
 def _walls(rows: list[dict]) -> FlatWalls:
     col = lambda key, dtype=float: np.array([r[key] for r in rows], dtype=dtype)  # noqa: E731
     return FlatWalls(
-        story=col("story", np.int64), direction=col("direction", np.int64),
-        normal=np.array([r["normal"] for r in rows], float).reshape(-1, 2), offset=col("offset"),
-        u_min=col("u_min"), u_max=col("u_max"), bottom=col("bottom"), top=col("top"),
-        support=col("support", np.int64), area=col("area"), directions=np.array([[1.0, 0.0], [0.0, 1.0]]),
-        face_segment=np.zeros(0, np.int64), segment_story=np.zeros(0, np.int64),
-        segment_kept=np.zeros(0, bool), segment_wall=np.zeros(0, np.int64),
+        story=col("story", np.int64),
+        direction=col("direction", np.int64),
+        normal=np.array([r["normal"] for r in rows], float).reshape(-1, 2),
+        offset=col("offset"),
+        u_min=col("u_min"),
+        u_max=col("u_max"),
+        bottom=col("bottom"),
+        top=col("top"),
+        support=col("support", np.int64),
+        area=col("area"),
+        directions=np.array([[1.0, 0.0], [0.0, 1.0]]),
+        face_segment=np.zeros(0, np.int64),
+        segment_story=np.zeros(0, np.int64),
+        segment_kept=np.zeros(0, bool),
+        segment_wall=np.zeros(0, np.int64),
     )
 
 
 def _door(walls: FlatWalls, wall: int, u0: float, u1: float) -> Openings:
     return Openings(
-        story=np.zeros(1, np.int64), kind=("door",), wall=np.array([wall]), u_min=np.array([u0]),
-        u_max=np.array([u1]), bottom=np.zeros(1), top=np.array([2.05]),
+        story=np.zeros(1, np.int64),
+        kind=("door",),
+        wall=np.array([wall]),
+        u_min=np.array([u0]),
+        u_max=np.array([u1]),
+        bottom=np.zeros(1),
+        top=np.array([2.05]),
         faces=(((wall, u0, u1, 0.0, 2.05),),),
     )
 
@@ -91,6 +113,61 @@ def test_a_leaf_standing_ajar_in_its_doorway_is_no_wall(angle_deg):
     walls = _walls(rows)
     u0, u1 = sorted((_tangent_u(walls, 1, 2.0), _tangent_u(walls, 1, 2.85)))
     assert door_leaves(walls, _door(walls, 1, u0, u1)).tolist() == [False, False, True]
+
+
+def _columns(profile, step_m: float = 0.23, noise_m: float = 0.002, seed: int = 0):
+    """Columns of a run of wall (centres ``u``, plane offsets ``v``, areas, spans) every
+    ``step_m`` along 0 .. 2.4 m, their offsets ``profile(u)`` plus noise."""
+    u = np.arange(0.11, 2.4, step_m)
+    v = profile(u) + np.random.default_rng(seed).normal(0.0, noise_m, len(u))
+    return u, v, np.full(len(u), 0.37), u - step_m / 2, u + step_m / 2
+
+
+SNAP_RAD = np.radians(WallParams().snap_deg)
+
+
+def _cuts(profile, seed: int = 0) -> list[float]:
+    u, v, w, lo, hi = _columns(profile, seed=seed)
+    return [float(lo[a]) for a, _ in _chords(u, v, w, lo, hi, WallParams().box_depth_m / 2, WallParams().min_wall_length_m, SNAP_RAD)[1:]]
+
+
+@pytest.mark.parametrize("turn_deg", [4.0, 5.5, 8.0])
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_a_leaf_ajar_at_the_end_of_a_wall_is_cut_from_it(turn_deg, seed):
+    """A leaf ajar in a doorway, its 0.8 m (3-4 columns) turned from the wall face it closes
+    into and continuing it (hard seed 10: 5.4 degrees, never more than 5 cm from the chord),
+    is cut from the wall: before, wall and leaf were one piece at the angle between them,
+    drawn across the doorway. A wall bent as gently along its length (drift), turned 1.5
+    degrees at its end, turned 4 degrees over 1.6 m (more than a leaf), or turned between two
+    pieces of itself stays one piece."""
+    a = np.tan(np.radians(turn_deg))
+    leaf = lambda u: np.where(u < 0.8, (0.8 - u) * a, 0.0)  # noqa: E731 - leaf over u < 0.8
+    assert _cuts(leaf, seed) == pytest.approx([0.8], abs=0.25)
+    assert _cuts(lambda u: leaf(2.4 - u), seed) == pytest.approx([1.6], abs=0.25)  # at the other end
+    drift = lambda u: 0.06 * (u / 2.4) ** 2  # noqa: E731 - 6 cm over 2.4 m, curving
+    assert _cuts(drift, seed) == []
+    slight = np.tan(np.radians(1.5))
+    assert _cuts(lambda u: np.where(u < 0.8, (0.8 - u) * slight, 0.0), seed) == []
+    long_turn = np.tan(np.radians(4.0))  # longer than a leaf: a wall's kink
+    assert _cuts(lambda u: np.where(u > 0.8, (u - 0.8) * long_turn, 0.0), seed) == []
+    # turned 4 degrees between two pieces of the wall, before a step back (cut there): no
+    # doorway ends it
+    between = lambda u: np.where((u > 0.8) & (u < 1.6), (u - 0.8) * long_turn, 0.0) + np.where(u >= 1.6, -0.06, 0.0)  # noqa: E731
+    assert _cuts(between, seed) == pytest.approx([1.6], abs=0.25)
+
+
+def test_a_leaf_ajar_in_few_columns_is_not_cut_a_column_off():
+    """Hard seed 6's leaf ajar 8 degrees beside 0.45 m of its wall face: six columns, the third
+    holding both. Cut after it, the wall's piece reached 0.3 m into the doorway and the leaf's
+    0.56 m rest, too far from the jamb to be a leaf, stayed a wall; too few columns to tell
+    (:data:`meshplan.walls.flat.KINK_CONFIDENCE`), the run stays whole and is the leaf's."""
+    u = np.array([0.346, 0.577, 0.802, 1.038, 1.263, 1.413])
+    v = -np.array([6.205, 6.202, 6.190, 6.145, 6.108, 6.088])
+    w = np.array([0.27, 0.40, 0.71, 0.63, 0.65, 0.22])
+    lo = np.array([0.24, 0.43, 0.66, 0.91, 1.13, 1.34])
+    hi = np.array([0.45, 0.69, 0.96, 1.16, 1.42, 1.46])
+    params = WallParams()
+    assert _chords(u, v, w, lo, hi, params.box_depth_m / 2, params.min_wall_length_m, SNAP_RAD) == [(0, 6)]
 
 
 def test_a_piece_of_a_drifting_wall_beside_a_door_is_no_leaf():
