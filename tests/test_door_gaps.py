@@ -201,6 +201,19 @@ def test_a_jamb_scanned_a_little_lower_than_the_wall_beside_it_is_a_headless_doo
     assert door.how == "head unseen"
 
 
+@pytest.mark.parametrize("piece_m, door", [(0.45, True), (0.6, True), (0.2, False)])
+def test_a_jamb_on_a_piece_scanned_lower_than_the_next_is_a_headless_door(piece_m, door):
+    """Hard seed 6's entrance: the gap's right jamb stands on a piece of wall scanned to 1.45 m,
+    ``piece_m`` long, and the wall beyond it to 1.8 m, which sets the median top of the metre
+    beside the jamb. A piece that long holds the jamb's top level: the wall's full scanned height
+    there, a door. Only 20 cm at that height is the ragged edge of a hole: none."""
+    right = 1.85 + piece_m
+    f = _scanned_to([(0.0, 1.0, 1.45), (1.0, 1.85, 0.0), (1.85, right, 1.45), (right, 4.0, 1.8)], length_m=4.0)
+    walls = SimpleNamespace(u_min=np.array([0.0]), u_max=np.array([4.0]))
+    found = _doors(f, walls, np.ones(f.grid.shape[1]), PlanParams())
+    assert [(c.how, round(c.u_min, 2), round(c.u_max, 2)) for c in found] == ([("head unseen", 1.0, 1.85)] if door else [])
+
+
 def test_a_window_whose_head_was_not_scanned_is_found_from_its_sill_and_jambs():
     """A face scanned to 1.7 m (nothing above) with an empty rectangle from a 0.9 m sill up to
     where the scan stopped, 1.0-2.2 m along: a window with an assumed head. The same face with

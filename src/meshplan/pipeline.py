@@ -90,8 +90,7 @@ def check_not_flat(mesh: Mesh) -> None:
     tensor = ((normals * areas[:, None]).T @ normals) / total
     if np.all(np.isfinite(tensor)) and np.linalg.eigvalsh(tensor)[-1] >= FLAT_SHARE:
         raise GeometryError(
-            f"the scan holds no room: all its {mesh.n_faces:,} faces are parallel "
-            "(a single wall or floor, or floors and ceilings without walls)",
+            f"the scan holds no room: all its {mesh.n_faces:,} faces are parallel (a single wall or floor, or floors and ceilings without walls)",
             "scan the whole room, with its floor and its walls",
         )
 
@@ -238,7 +237,7 @@ def _compute(
                     pen_and_ink=pen,
                     drafting=cut,
                     annotations=story_ann,
-                    symbols=plan_symbols(story.index, walls, openings, rooms, physical, options.render.imperial, stairs=stairs),
+                    symbols=plan_symbols(story.index, walls, openings, rooms, physical, options.render.imperial, stairs=stairs, elements=elements),
                     reference=_read_only(slice_mesh(plan_mesh.triangles[story_faces], np.array([cut.height])).segments),
                     model_faces=_read_only(np.flatnonzero(in_story & without_ceiling(heights, normal_y, story, options.orient.slab_tolerance_m))),
                 )

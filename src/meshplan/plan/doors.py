@@ -383,8 +383,14 @@ class WallEvidence:
         return self.slab_faces(np.zeros(0, np.int64), key, w, d_range, u_range)
 
     def near(
-        self, faces: IntArray, n3: FloatArray, t3: FloatArray, off: float,
-        d_range: tuple[float, float], u_range: tuple[float, float], y_range: tuple[float, float],
+        self,
+        faces: IntArray,
+        n3: FloatArray,
+        t3: FloatArray,
+        off: float,
+        d_range: tuple[float, float],
+        u_range: tuple[float, float],
+        y_range: tuple[float, float],
     ) -> IntArray:
         """The ``faces`` whose reach from their centroid overlaps the box ``d_range`` across,
         ``u_range`` along and ``y_range`` up a wall (a superset of those crossing it)."""
@@ -552,11 +558,7 @@ def _gaps(ev: WallEvidence, w: int, floor: float, ceiling: float) -> list[Candid
     d = tv @ n3 - off
     u = tv @ t3
     y = tv[:, :, 1]
-    keep = (
-        (_max3(d) >= far) & (_min3(d) <= near)
-        & (_max3(u) >= lo) & (_min3(u) <= hi)
-        & (_max3(y) >= floor) & (_min3(y) <= ceiling)
-    )
+    keep = (_max3(d) >= far) & (_min3(d) <= near) & (_max3(u) >= lo) & (_min3(u) <= hi) & (_max3(y) >= floor) & (_min3(y) <= ceiling)
     tri = tv[keep]
     if not len(tri):
         return []
@@ -715,6 +717,7 @@ def _gaps(ev: WallEvidence, w: int, floor: float, ceiling: float) -> list[Candid
     if len(back):
         face = raster(at, near, -RECESS_MIN_M)
         recess = ndimage.binary_closing(raster(cells(_samples(back, cell)), -RECESS_MIN_M, far), structure=np.ones((2, 2))) & ~face
+
         # the depths of the room-facing surfaces, sampled only for a face with a recess that
         # passes the cheap tests (most faces have none)
         def depth() -> tuple[IntArray, IntArray, FloatArray]:
@@ -1133,14 +1136,24 @@ def _doors(f: _Frame, walls: FlatWalls, floor_cols: np.ndarray, params: PlanPara
 #: jambs of a hole in the scan stop 40 cm and more below the wall around it.
 JAMB_TOP_CELLS = 4
 
+#: A jamb also reaches the wall's scanned top (:func:`_jambs_reach_wall_top`) when the wall
+#: beside it holds the jamb's top, within :data:`JAMB_TOP_CELLS`, over at least this length (m)
+#: from the gap: the piece of wall the jamb belongs to was scanned as high as the jamb, though the
+#: next piece was scanned higher (hard seed 6: an entrance door's jamb piece, 0.45 m long, stops
+#: at 1.45 m and the wall beyond it at 1.8 m, which set the median of the metre beside the
+#: jamb). The edge of a hole in the scan climbs to the wall's top over a few cells; it holds no
+#: level top this long.
+JAMB_LEVEL_M = 0.4
+
 
 def _jambs_reach_wall_top(f: _Frame, col_top: FloatArray, left: int, right: int) -> bool:
     """Whether the wall at each jamb (the highest of the columns ``left`` and ``right`` and the
     :data:`EDGE_CELLS` next to them in the wall, for the rounded or decimated corner of a jamb)
     rises within :data:`JAMB_TOP_CELLS` cells of the top of the wall scanned beside it (the median
     top of the columns within :data:`HEAD_UNSEEN_CONTEXT_M` on its side, the columns a corner
-    closes left out: a ragged top scatters by a few cells): the gap's edges are the wall's full
-    scanned height, not a hole lower in it."""
+    closes left out: a ragged top scatters by a few cells), or holds its top level along the wall
+    for :data:`JAMB_LEVEL_M`: the gap's edges are the wall's full scanned height, not a hole
+    lower in it."""
     k = max(1, int(np.ceil(HEAD_UNSEEN_CONTEXT_M / f.cell)))
     first = EDGE_CELLS if f.left_corner else 0
     stop = len(col_top) - EDGE_CELLS if f.right_corner else len(col_top)
@@ -1149,11 +1162,20 @@ def _jambs_reach_wall_top(f: _Frame, col_top: FloatArray, left: int, right: int)
     def tops(a: int, b: int) -> FloatArray:
         return col_top[max(a, first) : min(b, stop)]
 
-    def reaches(jamb: FloatArray, beside: FloatArray) -> bool:
-        return bool(len(jamb) and len(beside) and jamb.max() >= np.median(beside) - tol)
+    level = max(1, int(np.ceil(JAMB_LEVEL_M / f.cell - 1e-9)))
 
-    return reaches(tops(left - EDGE_CELLS, left + 1), tops(left - k, left + 1)) and reaches(
-        tops(right, right + EDGE_CELLS + 1), tops(right, right + k + 1)
+    def reaches(jamb: FloatArray, beside: FloatArray, outward: FloatArray) -> bool:
+        if not (len(jamb) and len(beside)):
+            return False
+        top = jamb.max()
+        if top >= np.median(beside) - tol:
+            return True
+        # the columns from the gap outward, as long as they stay level with the jamb's top
+        held = np.abs(outward - top) <= tol
+        return bool(len(held) >= level and held[:level].all())
+
+    return reaches(tops(left - EDGE_CELLS, left + 1), tops(left - k, left + 1), tops(left - level + 1, left + 1)[::-1]) and reaches(
+        tops(right, right + EDGE_CELLS + 1), tops(right, right + k + 1), tops(right, right + level)
     )
 
 
@@ -1473,8 +1495,10 @@ def _panels(ev: WallEvidence, w: int, floor: float, ceiling: float) -> list[Cand
     in_slab = (dmin >= far) & (dmax <= near) & (umin >= walls.u_min[w] - tol) & (umax <= walls.u_max[w] + tol)
     doors = (
         (ymin <= floor + params.opening_margin_m)
-        & (ymax - floor >= params.door_height_m - tol) & (ymax <= ceiling - params.opening_margin_m)
-        & (width >= params.door_width_m[0]) & (width <= params.door_width_m[1])
+        & (ymax - floor >= params.door_height_m - tol)
+        & (ymax <= ceiling - params.opening_margin_m)
+        & (width >= params.door_width_m[0])
+        & (width <= params.door_width_m[1])
     )
     area = ev.mesh.face_areas[faces]
     largest = np.maximum.reduceat(area, seg)
@@ -1483,10 +1507,13 @@ def _panels(ev: WallEvidence, w: int, floor: float, ceiling: float) -> list[Cand
     # missing seam, a decimated piece of a couple of hundred triangles) is not a door
     doors &= largest >= PANEL_PRIMITIVE_SHARE * width * (ymax - ymin)
     windows = (
-        (np.abs(0.5 * (dmin + dmax)) <= PANEL_PLANE_M) & (dmax - dmin <= PANEL_THICKNESS_M)
-        & (ymin >= floor + PANEL_SILL_MIN_M) & (ymax <= ceiling - params.opening_margin_m)
+        (np.abs(0.5 * (dmin + dmax)) <= PANEL_PLANE_M)
+        & (dmax - dmin <= PANEL_THICKNESS_M)
+        & (ymin >= floor + PANEL_SILL_MIN_M)
+        & (ymax <= ceiling - params.opening_margin_m)
         & (ymax - ymin >= params.window_height_m)
-        & (width >= params.window_width_m[0]) & (width <= params.window_width_m[1])
+        & (width >= params.window_width_m[0])
+        & (width <= params.window_width_m[1])
         & (width * (ymax - ymin) >= params.window_area_m2)
         & (largest >= PANEL_PRIMITIVE_SHARE * width * (ymax - ymin))
     )

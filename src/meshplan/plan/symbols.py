@@ -1,8 +1,10 @@
 """Drafting symbols in plan coordinates: door leaves and swings, window sashes, jambs, room labels,
 dimension lines and stairs. Drawings (matplotlib) and CAD files (DXF) draw the same symbols.
 
-A door between two rooms is found on both faces of its wall; it is drawn once, swinging into the
-room of the first face found, with jamb lines across the wall. A window is drawn as the usual
+A door between two rooms is found on both faces of its wall; it is drawn once, with jamb lines
+across the wall, its leaf square to the wall from the hinge the scan showed, swinging into the
+side it opens to (:class:`meshplan.plan.elements.Swing`); where the scan showed no leaf, from
+the jamb at the start of the face it was found on, into that face's room. A window is drawn as the usual
 triple line across the wall. Wall thickness comes from the physical walls (see
 :mod:`meshplan.walls.physical`).
 
@@ -25,6 +27,7 @@ from ..geometry import FloatArray
 from ..units import FOOT_M
 from ..walls import FlatWalls
 from ..walls.physical import PhysicalWall, wall_of_face
+from .elements import OpeningElement, Swing
 from .openings import Openings
 from .rooms import Room
 
@@ -219,6 +222,31 @@ def _label_area(polygon: Polygon, blocked) -> Polygon:
     return best if radius >= LABEL_FREE_RADIUS_M else polygon
 
 
+def _door_frame(swing: Swing | None, walls: FlatWalls, w: int, u0: float, u1: float, depth: float) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """Where a door's symbol stands: its hinge jamb on the face of the room the leaf opens into,
+    the unit direction along the wall to the other jamb, and the unit normal into that room.
+
+    From the door's :class:`~meshplan.plan.elements.Swing`: the jamb nearer its hinge, on face
+    ``w`` (found from ``u0`` to ``u1``) or on the wall's other face ``depth`` behind it, the
+    side read back from the swing's hand (:func:`meshplan.plan.elements._hand`: seen from the
+    room the leaf opens into, the hinge is on the viewer's right of the other jamb for a right
+    hand), which holds where the room on that side is unknown. A door whose leaf the scan did
+    not show (``swing`` None) keeps the jamb at ``u0`` and face ``w``'s normal.
+    """
+    n, t, off = walls.normal[w], walls.tangent[w], float(walls.offset[w])
+    if swing is None:
+        return u0 * t + off * n, t, n
+    u_hinge = float(np.asarray(swing.hinge) @ t)
+    at_start = abs(u_hinge - u0) <= abs(u_hinge - u1)
+    u, u_other = (u0, u1) if at_start else (u1, u0)
+    # a viewer on side s of the face looks along -s n; their right is (-look_z, look_x) on the
+    # page (x right, z down), s (n_z, -n_x)
+    right_of_other = (u - u_other) * float(t @ np.array([n[1], -n[0]]))
+    side = 1.0 if (right_of_other > 0) == (swing.hand == "right") else -1.0
+    face = off if side > 0 else off - depth
+    return u * t + face * n, (t if at_start else -t), side * n
+
+
 def plan_symbols(
     story: int,
     walls: FlatWalls,
@@ -228,10 +256,13 @@ def plan_symbols(
     imperial: bool = False,
     dimension_offset_m: float = 0.3,
     stairs: tuple[StairElement, ...] = (),
+    elements: tuple[OpeningElement, ...] = (),
 ) -> PlanSymbols:
     """The symbols of one story's drafting plan; door jambs and window sashes span the
     thickness of the ``physical`` wall carrying each opening. ``stairs`` (``Result.stairs``)
-    are drawn on the stories they start on and arrive at (:func:`stair_symbols`)."""
+    are drawn on the stories they start on and arrive at (:func:`stair_symbols`); a door whose
+    element (``elements``, one per row of ``openings``) has a swing is drawn from its hinge
+    into the room it opens into (:func:`_door_frame`)."""
     carrier = wall_of_face(physical, len(walls))
     leaves, arcs, jambs, windows = [], [], [], []
     records: list[OpeningSymbol] = []
@@ -248,18 +279,21 @@ def plan_symbols(
         p0 = u0 * t + walls.offset[w] * n
         p1 = u1 * t + walls.offset[w] * n
         back = -n * depth
+        origin, along, out = p0, t, n
         if openings.kind[i] == "door":
             if any(np.linalg.norm(c - centers[i]) < depth + 0.3 for c, _ in drawn):
                 continue  # the same door seen from the other side
             drawn.append((centers[i], depth))
             width = u1 - u0
-            leaves.append([p0, p0 + n * width])
-            a_leaf = np.degrees(np.arctan2(n[1], n[0]))
-            a_jamb = np.degrees(np.arctan2(t[1], t[0]))
+            if i < len(elements):
+                origin, along, out = _door_frame(elements[i].swing, walls, w, u0, u1, depth)
+            leaves.append([origin, origin + out * width])
+            a_leaf = np.degrees(np.arctan2(out[1], out[0]))
+            a_jamb = np.degrees(np.arctan2(along[1], along[0]))
             lo, hi = sorted((a_leaf, a_jamb))
             if hi - lo > 180:
                 lo, hi = hi, lo + 360
-            arcs.append(Arc((float(p0[0]), float(p0[1])), float(width), float(lo), float(hi)))
+            arcs.append(Arc((float(origin[0]), float(origin[1])), float(width), float(lo), float(hi)))
         else:
             for f in (0.0, 0.5, 1.0):
                 windows.append([p0 + back * f, p1 + back * f])
@@ -268,9 +302,9 @@ def plan_symbols(
         records.append(
             OpeningSymbol(
                 str(openings.kind[i]),
-                (float(p0[0]), float(p0[1])),
-                (float(t[0]), float(t[1])),
-                (float(n[0]), float(n[1])),
+                (float(origin[0]), float(origin[1])),
+                (float(along[0]), float(along[1])),
+                (float(out[0]), float(out[1])),
                 float(u1 - u0),
                 float(depth),
                 float(openings.top[i] - openings.bottom[i]),
@@ -468,6 +502,7 @@ def _stair_symbol(k: int, st: StairElement, role: str, imperial: bool):
     flights = _drawn_flights(st)
     boxes = [_flight_box(st, fl) for fl in flights]
     for fl, (d, across, s0, s1, a0, a1) in zip(flights, boxes):
+
         def pt(u, v, d=d, across=across):
             return d * u + across * v
 
