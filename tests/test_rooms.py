@@ -147,6 +147,47 @@ def test_ifc_export(computed, tmp_path):
     assert all(ifc_bytes(result) == path.read_bytes() for _ in range(4))
 
 
+@pytest.mark.parametrize("seed", [1, 2])
+def test_ifc_doors_open_as_the_scan_shows(computed, tmp_path, seed):
+    """Every IfcDoor whose leaf the scan showed opens towards its placement's +y into the room
+    the leaf opens into, and its OperationType names the hand as IFC does (hinges on the left
+    viewed in the direction of +y: SINGLE_SWING_LEFT has its hinge at local x = 0). Before, each
+    door was placed along its physical wall's direction and named by the hand seen from the
+    room it opens into: about half opened into the wrong room, the others had the mirror hand."""
+    ifcopenshell = pytest.importorskip("ifcopenshell")
+    import ifcopenshell.util.placement as placement
+    from shapely.geometry import Point, Polygon
+
+    from meshplan.export.ifc import ifc_bytes
+
+    _, result = computed("hard", seed)
+    path = tmp_path / "model.ifc"
+    path.write_bytes(ifc_bytes(result))
+    f = ifcopenshell.open(str(path))
+    doors = [(d, placement.get_local_placement(d.ObjectPlacement)) for d in f.by_type("IfcDoor")]
+    polygons = [Polygon(r.polygon.exterior.coords) for r in result.rooms]
+    centers = result.openings.center(result.walls)
+    checked = 0
+    for i, el in enumerate(result.opening_elements):
+        if result.openings.kind[i] != "door" or el.swing is None or not isinstance(el.opens_to, int):
+            continue
+        c = centers[i]
+        width = float(result.openings.width[i])
+        # the IfcDoor of this opening: its local x = 0 .. width spans the doorway around c
+        door, m = min(doors, key=lambda dm: np.hypot(dm[1][0, 3] + dm[1][0, 0] * width / 2 - c[0], -(dm[1][1, 3] + dm[1][1, 0] * width / 2) - c[1]))
+        x_plan = np.array([m[0, 0], -m[1, 0]])
+        y_plan = np.array([m[0, 1], -m[1, 1]])
+        o_plan = np.array([m[0, 3], -m[1, 3]])
+        assert np.linalg.norm(o_plan + x_plan * width / 2 - c) < 0.2
+        ahead = Point(*(c + 0.5 * y_plan))
+        assert polygons[el.opens_to].contains(ahead), (c, el.opens_to)
+        hinge_x = float((np.asarray(el.swing.hinge) - o_plan) @ x_plan)
+        assert door.OperationType == ("SINGLE_SWING_LEFT" if hinge_x < width / 2 else "SINGLE_SWING_RIGHT")
+        assert min(abs(hinge_x), abs(hinge_x - width)) < 0.15
+        checked += 1
+    assert checked >= 4
+
+
 def test_evaluate_command(tmp_path, capsys, computed):
     scan, result = computed("apartment", 0)
     plan = tmp_path / "plan.json"

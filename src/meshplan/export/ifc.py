@@ -25,6 +25,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..errors import MeshplanError
+from ..plan.symbols import door_frame
 from ..validation import plain_text
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -151,9 +152,12 @@ def ifc_bytes(result: Result) -> bytes:
         counts[kind] += 1
         el = elements[i] if i < len(elements) else None
         width, height = float(ops.width[i]), float(ops.top[i] - ops.bottom[i])
-        d = pw.direction
+        d = np.asarray(pw.direction, dtype=np.float64)
         u_center = float(np.dot(centers[i] - np.asarray(pw.start), d))
         origin = np.asarray(pw.start) + (u_center - width / 2) * d
+        operation, fill_origin, fill_d = "NOTDEFINED", origin, d
+        if kind == "door" and el is not None and el.swing is not None:
+            operation, fill_origin, fill_d = _swung_door(el.swing, result.walls, int(ops.wall[i]), ops, i, pw, u_center, width)
         opening = root.create_entity(f, ifc_class="IfcOpeningElement", name=f"{kind} opening {counts[kind]}", predefined_type="OPENING")
         rep = geometry.add_wall_representation(f, context=body, length=width, height=height, thickness=pw.thickness + 0.1, offset=-(pw.thickness + 0.1) / 2)
         geometry.assign_representation(f, product=opening, representation=rep)
@@ -164,10 +168,10 @@ def ifc_bytes(result: Result) -> bytes:
         )
         fill.OverallWidth, fill.OverallHeight = width, height
         if kind == "door":
-            fill.OperationType = _door_operation(el)
+            fill.OperationType = operation
         rep = geometry.add_wall_representation(f, context=body, length=width, height=height, thickness=0.05, offset=-0.025)
         geometry.assign_representation(f, product=fill, representation=rep)
-        geometry.edit_object_placement(f, product=fill, matrix=_placement(origin, float(ops.bottom[i]), d))
+        geometry.edit_object_placement(f, product=fill, matrix=_placement(fill_origin, float(ops.bottom[i]), fill_d))
         feature.add_filling(f, opening=opening, element=fill)
         spatial.assign_container(f, products=[fill], relating_structure=storeys[int(ops.story[i])][0])
         if el is not None:
@@ -321,11 +325,25 @@ def _room_ref(x: Any, numbers: list[str]) -> str:
     return numbers[x] if isinstance(x, int) else "outside" if x == "outside" else "unknown"
 
 
-def _door_operation(el: Any) -> str:
-    """IfcDoorTypeOperationEnum of a door from the leaf seen in the scan."""
-    if el is None or el.swing is None:
-        return "NOTDEFINED"
-    return "SINGLE_SWING_LEFT" if el.swing.hand == "left" else "SINGLE_SWING_RIGHT"
+def _swung_door(swing: Any, walls: Any, face: int, ops: Any, i: int, pw: Any, u_center: float, width: float) -> tuple[str, np.ndarray, np.ndarray]:
+    """An IfcDoor whose leaf the scan showed: its OperationType and placement (plan origin and
+    local x direction). IFC opens a door towards its placement's +y and names the hand looking
+    that way ("hinges on the left side as viewed in the direction of the positive y-axis"):
+    local x runs along the wall so that +y (z x x, with z up) points into the room the leaf
+    opens into (:func:`meshplan.plan.symbols.door_frame`), from the jamb at local x = 0, and
+    the door is SINGLE_SWING_LEFT when its hinge is at that jamb. Before, every door was placed
+    along its physical wall's direction and named by the hand seen from the room it opens into,
+    so that half of them opened into the wrong room and the others had the mirrored hand."""
+    d = np.asarray(pw.direction, dtype=np.float64)
+    jamb, _, out = door_frame(swing, walls, face, float(ops.u_min[i]), float(ops.u_max[i]), pw.thickness)
+    # plan +y of a placement whose local x is e: (e_z, -e_x) (IFC y = -plan z); +y = out
+    e = np.array([-out[1], out[0]])
+    sign = 1.0 if float(e @ d) >= 0.0 else -1.0
+    start_u = u_center - sign * width / 2  # along d, where local x = 0
+    hinge_u = float((jamb - np.asarray(pw.start)) @ d)
+    at_start = abs(hinge_u - start_u) <= abs(hinge_u - (u_center + sign * width / 2))
+    origin = np.asarray(pw.start) + start_u * d
+    return ("SINGLE_SWING_LEFT" if at_start else "SINGLE_SWING_RIGHT"), origin, sign * d
 
 
 def _annotation_pset(f, pset, el, label: str, kind: str, p, d, detected: bool) -> None:
@@ -395,10 +413,14 @@ def _add_stairs(f, result: Result, storeys: dict, body) -> None:
             aggregate.assign_object(f, products=[part], relating_object=stair)
         ps = pset.add_pset(f, product=stair, name="Pset_StairCommon")
         pset.edit_pset(
-            f, pset=ps,
+            f,
+            pset=ps,
             properties={
-                "NumberOfRiser": int(s.risers), "NumberOfTreads": max(int(s.risers) - 1, 0), "RiserHeight": float(s.rise),
-                "TreadLength": float(s.going), "Reference": "meshplan",
+                "NumberOfRiser": int(s.risers),
+                "NumberOfTreads": max(int(s.risers) - 1, 0),
+                "RiserHeight": float(s.rise),
+                "TreadLength": float(s.going),
+                "Reference": "meshplan",
             },
         )
         ps = pset.add_pset(f, product=stair, name="meshplan")

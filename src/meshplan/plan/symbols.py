@@ -222,7 +222,7 @@ def _label_area(polygon: Polygon, blocked) -> Polygon:
     return best if radius >= LABEL_FREE_RADIUS_M else polygon
 
 
-def _door_frame(swing: Swing | None, walls: FlatWalls, w: int, u0: float, u1: float, depth: float) -> tuple[FloatArray, FloatArray, FloatArray]:
+def door_frame(swing: Swing | None, walls: FlatWalls, w: int, u0: float, u1: float, depth: float) -> tuple[FloatArray, FloatArray, FloatArray]:
     """Where a door's symbol stands: its hinge jamb on the face of the room the leaf opens into,
     the unit direction along the wall to the other jamb, and the unit normal into that room.
 
@@ -262,7 +262,7 @@ def plan_symbols(
     thickness of the ``physical`` wall carrying each opening. ``stairs`` (``Result.stairs``)
     are drawn on the stories they start on and arrive at (:func:`stair_symbols`); a door whose
     element (``elements``, one per row of ``openings``) has a swing is drawn from its hinge
-    into the room it opens into (:func:`_door_frame`)."""
+    into the room it opens into (:func:`door_frame`)."""
     carrier = wall_of_face(physical, len(walls))
     leaves, arcs, jambs, windows = [], [], [], []
     records: list[OpeningSymbol] = []
@@ -286,7 +286,7 @@ def plan_symbols(
             drawn.append((centers[i], depth))
             width = u1 - u0
             if i < len(elements):
-                origin, along, out = _door_frame(elements[i].swing, walls, w, u0, u1, depth)
+                origin, along, out = door_frame(elements[i].swing, walls, w, u0, u1, depth)
             leaves.append([origin, origin + out * width])
             a_leaf = np.degrees(np.arctan2(out[1], out[0]))
             a_jamb = np.degrees(np.arctan2(along[1], along[0]))
