@@ -34,24 +34,7 @@ def _row(a, b, normal, story: int = 0) -> dict:
 
 
 def _walls(rows: list[dict]) -> FlatWalls:
-    col = lambda key, dtype=float: np.array([r[key] for r in rows], dtype=dtype)  # noqa: E731
-    return FlatWalls(
-        story=col("story", np.int64),
-        direction=col("direction", np.int64),
-        normal=np.array([r["normal"] for r in rows], float).reshape(-1, 2),
-        offset=col("offset"),
-        u_min=col("u_min"),
-        u_max=col("u_max"),
-        bottom=col("bottom"),
-        top=col("top"),
-        support=col("support", np.int64),
-        area=col("area"),
-        directions=np.array([[1.0, 0.0], [0.0, 1.0]]),
-        face_segment=np.zeros(0, np.int64),
-        segment_story=np.zeros(0, np.int64),
-        segment_kept=np.zeros(0, bool),
-        segment_wall=np.zeros(0, np.int64),
-    )
+    return FlatWalls.from_rows(rows, np.array([[1.0, 0.0], [0.0, 1.0]]))
 
 
 def _door(walls: FlatWalls, wall: int, u0: float, u1: float) -> Openings:

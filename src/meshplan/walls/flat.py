@@ -167,6 +167,38 @@ class FlatWalls:
     def __len__(self) -> int:
         return int(len(self.story))
 
+    @classmethod
+    def from_rows(
+        cls,
+        rows: list[dict],
+        directions: FloatArray,
+        face_segment: IntArray | None = None,
+        segment_story: IntArray | None = None,
+        segment_kept: np.ndarray | None = None,
+        segment_wall: IntArray | None = None,
+    ) -> FlatWalls:
+        """The walls of the wall stage's rows (dicts with the attributes' keys and ``normal`` a
+        pair), in their order; the segments none where not given."""
+        col = lambda key, dtype=np.float64: np.array([r[key] for r in rows], dtype=dtype)  # noqa: E731
+        none = np.zeros(0, dtype=np.int64)
+        return cls(
+            story=col("story", np.int64),
+            direction=col("direction", np.int64),
+            normal=np.array([r["normal"] for r in rows], dtype=np.float64).reshape(-1, 2),
+            offset=col("offset"),
+            u_min=col("u_min"),
+            u_max=col("u_max"),
+            bottom=col("bottom"),
+            top=col("top"),
+            support=col("support", np.int64),
+            area=col("area"),
+            directions=np.asarray(directions, dtype=np.float64),
+            face_segment=none if face_segment is None else face_segment,
+            segment_story=none if segment_story is None else segment_story,
+            segment_kept=np.zeros(0, dtype=bool) if segment_kept is None else segment_kept,
+            segment_wall=none if segment_wall is None else segment_wall,
+        )
+
     @property
     def tangent(self) -> FloatArray:
         """``(W, 2)`` unit tangents, ``(-normal_z, normal_x)`` (``np.stack``: ``np.c_`` costs
@@ -1256,24 +1288,7 @@ def find_flat_walls(mesh: Mesh, orientation: Orientation, params: WallParams | N
     face_segment = np.full(mesh.n_faces, -1, dtype=np.int64)
     labelled = np.flatnonzero(piece_segment >= 0)[::-1]
     face_segment[parent[labelled]] = piece_segment[labelled]
-    col = lambda key, dtype=np.float64: np.array([r[key] for r in rows], dtype=dtype)  # noqa: E731
-    return FlatWalls(
-        story=col("story", np.int64),
-        direction=col("direction", np.int64),
-        normal=np.array([r["normal"] for r in rows], dtype=np.float64).reshape(-1, 2),
-        offset=col("offset"),
-        u_min=col("u_min"),
-        u_max=col("u_max"),
-        bottom=col("bottom"),
-        top=col("top"),
-        support=col("support", np.int64),
-        area=col("area"),
-        directions=dirs,
-        face_segment=face_segment,
-        segment_story=np.array(seg_story, dtype=np.int64),
-        segment_kept=np.array(seg_kept, dtype=bool),
-        segment_wall=segment_wall,
-    )
+    return FlatWalls.from_rows(rows, dirs, face_segment, np.array(seg_story, dtype=np.int64), np.array(seg_kept, dtype=bool), segment_wall)
 
 
 #: The walls of a story stop short of its scanned ceiling when nothing vertical was scanned
