@@ -85,6 +85,19 @@ def test_a_piece_of_a_leaf_by_its_hinge_is_no_wall():
     assert door_leaves(walls, _door(walls, 1, u0, u1)).tolist() == [False, False, True, True]
 
 
+def test_both_faces_of_a_leaf_by_its_hinge_are_no_walls():
+    """Hard seed 1: a leaf open 37 degrees through its doorway, of which only the first 0.45 m
+    of each face was kept as a wall, the two pieces turned 13 degrees from each other (short,
+    noisy fits by the hinge) so that each one's free end met the other, "another wall": both
+    stayed walls. The leaf's other face, within the same leaf's swing, is no other wall."""
+    a, b = np.radians(54.8), np.radians(41.4)
+    one = _row((2.03, 0.0), (2.03 + 0.42 * np.cos(a), 0.42 * np.sin(a)), (np.sin(a), -np.cos(a)))
+    other = _row((2.01, 0.11), (2.01 + 0.45 * np.cos(b), 0.11 + 0.45 * np.sin(b)), (-np.sin(b), np.cos(b)))
+    walls = _walls([*PARTITION, one, other])
+    u0, u1 = sorted((_tangent_u(walls, 0, 2.0), _tangent_u(walls, 0, 2.85)))
+    assert door_leaves(walls, _door(walls, 0, u0, u1)).tolist() == [False, False, True, True]
+
+
 @pytest.mark.parametrize("angle_deg", [4.5, 7.0])
 def test_a_leaf_standing_ajar_in_its_doorway_is_no_wall(angle_deg):
     """A 0.85 m leaf hinged at the door's jamb on the +z face, open a few degrees: it lies

@@ -99,9 +99,7 @@ class Openings:
         def per_row(values: tuple) -> tuple:
             return tuple(values[i] for i in keep) if values else ()
 
-        faces = tuple(
-            tuple((int(new_index[f]), *rest) for f, *rest in cuts if new_index[f] >= 0) for cuts in per_row(self.faces)
-        )
+        faces = tuple(tuple((int(new_index[f]), *rest) for f, *rest in cuts if new_index[f] >= 0) for cuts in per_row(self.faces))
         return Openings(
             story=self.story[keep],
             kind=tuple(self.kind[i] for i in keep),
@@ -134,8 +132,6 @@ class Openings:
 def _empty() -> Openings:
     z = np.zeros(0)
     return Openings(np.zeros(0, np.int64), (), np.zeros(0, np.int64), z, z, z, z, ())
-
-
 
 
 def find_openings(
@@ -216,7 +212,8 @@ def door_leaves(walls: FlatWalls, openings: Openings, params: PlanParams | None 
     that wall, passes within :data:`LEAF_HINGE_M` of one of the door's jambs (the line across
     the wall's depth at either side of the door, where the hinge stands on one face), lies
     within the door's width of that jamb (inside the leaf's swing), and its end away from the
-    jamb meets no other wall (:data:`LEAF_FREE_END_M`; a leaf already found is none): a short
+    jamb meets no other wall (:data:`LEAF_FREE_END_M`; a leaf already found is none, nor is
+    another face within the swing of a leaf at the same jamb: the leaf's other face): a short
     return or a closet's side beside a door meets the wall across.
     """
     params = params or PlanParams()
@@ -248,22 +245,36 @@ def door_leaves(walls: FlatWalls, openings: Openings, params: PlanParams | None 
         if not len(cand):
             continue
         hinge = segment_distances(start[cand], end[cand], jamb_s, jamb_e)  # (candidates, 2 jambs)
+        # the candidates within the swing of a leaf hinged at each jamb: by it, and no farther
+        # from it than the door is wide
+        far = np.stack(
+            [
+                np.maximum(
+                    segment_distances(start[cand], start[cand], jamb_s[j : j + 1], jamb_e[j : j + 1])[:, 0],
+                    segment_distances(end[cand], end[cand], jamb_s[j : j + 1], jamb_e[j : j + 1])[:, 0],
+                )
+                for j in (0, 1)
+            ],
+            axis=1,
+        )
+        swung = (hinge <= LEAF_HINGE_M) & (far <= width + LEAF_HINGE_M)  # (candidates, 2 jambs)
         # twice: a piece of a leaf whose end meets the leaf's main face (the corner at its
         # hinge, clustered apart) is taken once that face is known to be a leaf
         for k, L in [*enumerate(cand), *enumerate(cand)]:
             if out[L]:
                 continue
             j = int(np.argmin(hinge[k]))
-            if hinge[k, j] > LEAF_HINGE_M:
+            if not swung[k, j]:
                 continue
             ends = np.array([start[L], end[L]])
             reach = segment_distances(ends, ends, jamb_s[j : j + 1], jamb_e[j : j + 1])[:, 0]
-            if reach.max() > width + LEAF_HINGE_M:
-                continue
             free = ends[int(np.argmax(reach))]
             # other walls the free end may meet: not the door's own wall, not a face parallel
-            # to this one (the leaf's other face)
+            # to this one, nor another face within the same leaf's swing: the leaf's other face,
+            # whose short pieces by the hinge may turn 10-12 degrees from this one (hard seed 1:
+            # both faces of a leaf's first 0.45 m kept as walls, each meeting the other)
             others = story & ~own & ~ajar & ~out & (np.abs(walls.normal @ walls.normal[L]) < cos_turn)
+            others[cand[swung[:, j]]] = False
             if not np.any(segment_distances(free[None], free[None], start[others], end[others]) <= LEAF_FREE_END_M):
                 out[L] = True
     return out
