@@ -4,8 +4,8 @@ dimension lines and stairs. Drawings (matplotlib) and CAD files (DXF) draw the s
 A door between two rooms is found on both faces of its wall; it is drawn once, with jamb lines
 across the wall, its leaf square to the wall from the hinge the scan showed, swinging into the
 side it opens to (:class:`meshplan.plan.elements.Swing`); where the scan showed no leaf, from
-the jamb at the start of the face it was found on, into that face's room. A window is drawn as the usual
-triple line across the wall. Wall thickness comes from the physical walls (see
+the jamb at the start of the face it was found on, into that face's room. A window is drawn as
+the usual triple line across the wall. Wall thickness comes from the physical walls (see
 :mod:`meshplan.walls.physical`).
 
 Why one long module: the sheet's drawing model (wall solids, openings, labels, dimension chains,
