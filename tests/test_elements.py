@@ -13,6 +13,7 @@ from shapely.geometry import LineString, Point, Polygon
 
 from meshplan.evaluate import _map_xz, truth_to_plan
 from meshplan.export.planjson import plan_document, plan_schema
+from meshplan.options import RunOptions
 from meshplan.plan.elements import (
     MarkedDrafting,
     load_room_edits,
@@ -98,7 +99,14 @@ def test_plan_json_elements(computed):
         assert w["height"] > 2.0 and w["thickness"] > 0
     exterior = [w for w in pw if w["exterior"]]
     assert len(exterior) == 4  # the four outer walls of the apartment
-    assert all(not w["thickness_measured"] for w in exterior)
+    # seen from inside only: the default thickness, or the depth of their openings' reveals where
+    # deeper (plan.elements.reveal_thickness)
+    default = RunOptions().walls.default_wall_thickness_m
+    for w in exterior:
+        if w["thickness_measured"]:
+            assert default < w["thickness"] <= 0.6 and "reveals" in w["confidence"]["reason"], w
+        else:
+            assert w["thickness"] == pytest.approx(default), w
     # doors and windows once each, as many as the truth's labels
     labels = {(o["kind"], o["label"]) for o in scan.truth["openings"]}
     for kind in ("door", "window"):

@@ -19,7 +19,7 @@ from .options import RunOptions
 from .orient import assign_faces
 from .orient.stories import without_ceiling
 from .plan import drafting, find_openings, find_rooms, find_stairs, pen_and_ink
-from .plan.elements import ModelName, RoomEdit, mark_low_confidence, name_rooms, opening_elements, section_names, type_rooms, wall_elements
+from .plan.elements import ModelName, RoomEdit, mark_low_confidence, name_rooms, opening_elements, reveal_thickness, section_names, type_rooms, wall_elements
 from .plan.openings import door_leaves
 from .plan.parametric import apply_parametric
 from .plan.stairs import attach_rooms
@@ -216,6 +216,8 @@ def _compute(
         rooms = find_rooms(plan_mesh, orientation, walls, options.plan, options.orient.slab_tolerance_m)
         # building elements: walls meeting at their centre lines, rooms numbered and named,
         # what each wall and opening joins, types and confidences
+        # a wall scanned from one side is as thick as the reveals of its openings show
+        physical = reveal_thickness(physical, walls, openings, plan_mesh)
         physical = join_walls(physical, JOIN_REACH_M)
         rooms = name_rooms(rooms, room_edits, _model_names(stats, orientation))
         physical = wall_elements(physical, rooms, orientation.stories, options.walls.floor_reach_m, options.walls.ceiling_reach_m)

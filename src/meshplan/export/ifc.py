@@ -98,7 +98,7 @@ def ifc_bytes(result: Result) -> bytes:
         ps = pset.add_pset(f, product=wall, name="Pset_WallCommon")
         pset.edit_pset(f, pset=ps, properties={"IsExternal": bool(pw.exterior), "Reference": "meshplan"})
         ps = pset.add_pset(f, product=wall, name="meshplan")
-        props: dict[str, Any] = {"faces": ",".join(str(i) for i in pw.faces), "thickness_measured": pw.paired}
+        props: dict[str, Any] = {"faces": ",".join(str(i) for i in pw.faces), "thickness_measured": pw.paired or pw.revealed}
         if pw.confidence:
             props.update(confidence=pw.confidence, confidence_reason=pw.confidence_reason)
         for side, rooms in zip(("rooms_front", "rooms_back"), pw.rooms):

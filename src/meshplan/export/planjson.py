@@ -159,7 +159,7 @@ def _physical_wall(w: Any, result: Result) -> dict[str, Any]:
         "normal": _r(w.normal, _ND),
         "length": round(float(w.length), _NC),
         "thickness": round(float(w.thickness), _NC),
-        "thickness_measured": bool(w.paired),
+        "thickness_measured": bool(w.paired or w.revealed),
         "height": round(float(story.height), _NC),
         "scanned_bottom": round(float(w.bottom), _NC),
         "scanned_top": round(float(w.top), _NC),

@@ -385,6 +385,89 @@ def _rooms_near(rooms: tuple[Room, ...], story: int, pts: FloatArray, slack: flo
     return out
 
 
+#: The reveal of an opening's jamb (:func:`reveal_thickness`): the faces standing across the
+#: wall at the jamb line, their centroids within this distance of it along the wall (m).
+REVEAL_BAND_M = 0.1
+#: ... facing along the wall within this angle (degrees) of its direction.
+REVEAL_FACING_DEG = 30.0
+#: ... between the opening's bottom and top less this margin (m): its sill, its head, a leaf's
+#: gap and the rounded corners stay out.
+REVEAL_MARGIN_M = 0.2
+#: ... and covering at least this area (m2) at the jamb: a strip 5 cm deep over 0.5 m of its
+#: height, more than a stray face.
+REVEAL_MIN_AREA_M2 = 0.025
+#: The depth of a reveal: this quantile (0-1) of how far its faces' corners reach behind the
+#: face the opening was found on, so that a stray corner sets none.
+REVEAL_DEPTH_QUANTILE = 0.9
+#: The deepest reveal read (m): solid masonry exterior walls, 0.5-0.6 m. Not the pairing limit
+#: of two faces into one wall (``WallParams.max_wall_thickness_m``, 8 in): exterior walls scanned
+#: from inside are the ones seen from one side, and they are the thick ones (the synthetic
+#: buildings' 0.25-0.35 m).
+REVEAL_MAX_M = 0.6
+
+
+def reveal_thickness(physical: tuple[PhysicalWall, ...], walls: FlatWalls, openings: Openings, mesh: Mesh) -> tuple[PhysicalWall, ...]:
+    """The walls scanned from one side only with their thickness read from the reveals of their
+    openings where those show it deeper than the default.
+
+    Through a doorway or a window without its pane the scan sees the jambs' reveals, the faces
+    across the wall's depth: how far they reach behind the scanned face is how thick the wall
+    is there, or less (a window's frame, a door's leaf closed in it, stop the reveal short). So
+    each opening's depth is the shallower of its two jambs' (a leaf opened outwards, nearly in
+    line with one reveal, runs on beyond it), and a wall takes the deepest of its openings',
+    up to :data:`REVEAL_MAX_M`, where it exceeds the default; the scanned face stays where it
+    is and the centre line moves back. Exterior walls were drawn 15 cm thick (the default) where
+    the synthetic buildings' are 25-35 cm, and the hinges of leaves opened outwards through them
+    stood on the default's face.
+    """
+    if not len(openings) or not len(physical):
+        return physical
+    carrier = wall_of_face(physical, len(walls))
+    cos_facing = np.cos(np.radians(REVEAL_FACING_DEG))
+    vertical = np.flatnonzero(np.abs(mesh.face_normals[:, 1]) < np.sin(np.radians(REVEAL_FACING_DEG)))
+    cxz = mesh.face_centroids[vertical][:, [0, 2]]
+    cy = mesh.face_centroids[vertical, 1]
+    depth_of: dict[int, float] = {}
+    centers = openings.center(walls)
+    for i in range(len(openings)):
+        f = int(openings.wall[i])
+        k = int(carrier[f]) if 0 <= f < len(carrier) else -1
+        if k < 0 or physical[k].paired:
+            continue
+        low, high = float(openings.bottom[i]) + REVEAL_MARGIN_M, float(openings.top[i]) - REVEAL_MARGIN_M
+        if high <= low:
+            continue
+        n, t, off = walls.normal[f], walls.tangent[f], float(walls.offset[f])
+        width = float(openings.u_max[i] - openings.u_min[i])
+        box = np.flatnonzero(np.all(np.abs(cxz - centers[i]) <= width / 2 + REVEAL_MAX_M + REVEAL_BAND_M, axis=1) & (cy >= low) & (cy <= high))
+        faces = vertical[box]
+        facing = np.abs(mesh.face_normals[faces][:, [0, 2]] @ t) >= cos_facing
+        faces = faces[facing]
+        corners = mesh.triangles[faces][..., [0, 2]]  # (k, 3, 2)
+        across = corners @ n - off  # behind the face: negative
+        u = mesh.face_centroids[faces][:, [0, 2]] @ t
+        inside = (across.max(axis=1) <= REVEAL_BAND_M) & (across.min(axis=1) >= -(REVEAL_MAX_M + REVEAL_BAND_M))
+        depths = []
+        for u_j in (float(openings.u_min[i]), float(openings.u_max[i])):
+            sel = inside & (np.abs(u - u_j) <= REVEAL_BAND_M)
+            if float(mesh.face_areas[faces[sel]].sum()) < REVEAL_MIN_AREA_M2:
+                break
+            depths.append(float(np.quantile(-across[sel].min(axis=1), REVEAL_DEPTH_QUANTILE)))
+        if len(depths) == 2:
+            depth_of[k] = max(depth_of.get(k, 0.0), min(depths))
+    out = []
+    for k, w in enumerate(physical):
+        depth = min(depth_of.get(k, 0.0), REVEAL_MAX_M)
+        if depth <= w.thickness:
+            out.append(w)
+            continue
+        n = walls.normal[w.faces[0]]
+        shift = -(depth - w.thickness) / 2 * n  # the face stays; the centre line moves back
+        start, end = np.asarray(w.start) + shift, np.asarray(w.end) + shift
+        out.append(replace(w, start=(float(start[0]), float(start[1])), end=(float(end[0]), float(end[1])), thickness=depth, revealed=True))
+    return tuple(out)
+
+
 def wall_elements(
     physical: tuple[PhysicalWall, ...], rooms: tuple[Room, ...], stories: tuple[Story, ...], floor_reach_m: float, ceiling_reach_m: float
 ) -> tuple[PhysicalWall, ...]:
@@ -412,6 +495,8 @@ def wall_elements(
             level, why = "low", f"short ({length:.2f} m)"
         elif moved > LONG_JOIN_SHARE * length:
             level, why = "low", f"extended {moved:.2f} m across unscanned space"
+        elif not w.paired and w.revealed:
+            level, why = "medium", f"one face scanned (thickness {w.thickness:.2f} m from the reveals of its openings)"
         elif not w.paired:
             level, why = "medium", f"one face scanned (thickness assumed {w.thickness:.2f} m)"
         elif not (floor_ok and ceiling_ok):

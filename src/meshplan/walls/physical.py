@@ -38,6 +38,9 @@ class PhysicalWall:
     #: how far each end (start, end) was moved along the wall by :func:`join_walls`, in metres:
     #: positive where it was extended to the wall it meets, negative where it was trimmed
     joined: tuple[float, float] = (0.0, 0.0)
+    #: one face scanned, the thickness read from the reveals of its openings instead of the
+    #: default (:func:`meshplan.plan.elements.reveal_thickness`)
+    revealed: bool = False
     #: what :mod:`meshplan.plan.elements` adds once the rooms are known: whether one side is
     #: outside the building, the rooms (indices into the result's rooms) on the side of
     #: ``normal`` and on the other side, and how sure the wall is (high, medium, low) and why
