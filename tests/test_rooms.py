@@ -232,7 +232,7 @@ def leaf_misses(doc: dict, truth: dict) -> list[str]:
     from shapely.geometry import Polygon
 
     from meshplan.evaluate import _map_xz, truth_to_plan
-    from meshplan.plan.doors import AJAR_MIN_TURN_DEG
+    from meshplan.walls.flat import AJAR_MIN_TURN_DEG
 
     p = truth_to_plan(doc, truth)
     polygons = [Polygon(r["polygon"]) for r in doc["rooms"]]

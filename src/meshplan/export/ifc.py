@@ -157,7 +157,8 @@ def ifc_bytes(result: Result) -> bytes:
         origin = np.asarray(pw.start) + (u_center - width / 2) * d
         operation, fill_origin, fill_d = "NOTDEFINED", origin, d
         if kind == "door" and el is not None and el.swing is not None:
-            operation, fill_origin, fill_d = _swung_door(el.swing, result.walls, int(ops.wall[i]), ops, i, pw, u_center, width)
+            jambs = (float(ops.u_min[i]), float(ops.u_max[i]))
+            operation, fill_origin, fill_d = _swung_door(el.swing, result.walls, int(ops.wall[i]), jambs, pw, u_center, width)
         opening = root.create_entity(f, ifc_class="IfcOpeningElement", name=f"{kind} opening {counts[kind]}", predefined_type="OPENING")
         rep = geometry.add_wall_representation(f, context=body, length=width, height=height, thickness=pw.thickness + 0.1, offset=-(pw.thickness + 0.1) / 2)
         geometry.assign_representation(f, product=opening, representation=rep)
@@ -325,9 +326,9 @@ def _room_ref(x: Any, numbers: list[str]) -> str:
     return numbers[x] if isinstance(x, int) else "outside" if x == "outside" else "unknown"
 
 
-def _swung_door(swing: Any, walls: Any, face: int, ops: Any, i: int, pw: Any, u_center: float, width: float) -> tuple[str, np.ndarray, np.ndarray]:
-    """An IfcDoor whose leaf the scan showed: its OperationType and placement (plan origin and
-    local x direction). IFC opens a door towards its placement's +y and names the hand looking
+def _swung_door(swing: Any, walls: Any, face: int, jambs: tuple[float, float], pw: Any, u_center: float, width: float) -> tuple[str, np.ndarray, np.ndarray]:
+    """An IfcDoor whose leaf the scan showed (found in flat wall ``face`` between ``jambs``,
+    along it): its OperationType and placement (plan origin and local x direction). IFC opens a door towards its placement's +y and names the hand looking
     that way ("hinges on the left side as viewed in the direction of the positive y-axis"):
     local x runs along the wall so that +y (z x x, with z up) points into the room the leaf
     opens into (:func:`meshplan.plan.symbols.door_frame`), from the jamb at local x = 0, and
@@ -335,7 +336,7 @@ def _swung_door(swing: Any, walls: Any, face: int, ops: Any, i: int, pw: Any, u_
     along its physical wall's direction and named by the hand seen from the room it opens into,
     so that half of them opened into the wrong room and the others had the mirrored hand."""
     d = np.asarray(pw.direction, dtype=np.float64)
-    jamb, _, out = door_frame(swing, walls, face, float(ops.u_min[i]), float(ops.u_max[i]), pw.thickness)
+    jamb, _, out = door_frame(swing, walls, face, *jambs, pw.thickness)
     # plan +y of a placement whose local x is e: (e_z, -e_x) (IFC y = -plan z); +y = out
     e = np.array([-out[1], out[0]])
     sign = 1.0 if float(e @ d) >= 0.0 else -1.0

@@ -54,6 +54,7 @@ from scipy import ndimage
 from .._kernels import face_components, max_corner_distance, sample_faces, scatter_max, scatter_min
 from ..geometry import FloatArray, IntArray, Mesh
 from ..walls import FlatWalls
+from ..walls.flat import AJAR_MIN_TURN_DEG
 from .params import PlanParams
 
 #: Edges longer than this (m) are halved before sampling: :func:`~meshplan.plan.rooms.sample_triangles` puts at most 64
@@ -161,11 +162,6 @@ MAD_TO_SIGMA = 1.4826
 #: A face in the line of a door's wall (:func:`_in_line`) turns from it by at most this angle
 #: (degrees): the scatter of one wall's pieces on a drifting scan.
 COLLINEAR_DOOR_DEG = 10.0
-#: A surface turned from a face by this angle (degrees) or more, up to :data:`COLLINEAR_DOOR_DEG`,
-#: may be a door leaf standing ajar rather than a piece of the face's wall; below it a leaf is
-#: closed as far as a scan can tell (its free end 4 cm or less off the wall's plane across a
-#: 0.8 m door: a frame's depth and a scan's noise).
-AJAR_MIN_TURN_DEG = 3.0
 #: A leaf's surface, as the scan clusters it, runs past its door's width by at most this much
 #: (m): the rounded corner at its hinge and the frame beside it.
 AJAR_HINGE_M = 0.2

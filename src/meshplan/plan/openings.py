@@ -31,8 +31,8 @@ import numpy as np
 from ..geometry import FloatArray, IntArray, Mesh
 from ..orient import Orientation
 from ..walls import FlatWalls, PhysicalWall, WallParams, physical_walls
-from ..walls.flat import segment_distances
-from .doors import AJAR_MIN_TURN_DEG, EDGE_CELLS, LEAF_MIN_TURN_DEG, Candidate, WallEvidence, wall_candidates
+from ..walls.flat import AJAR_MIN_TURN_DEG, segment_distances
+from .doors import EDGE_CELLS, LEAF_MIN_TURN_DEG, Candidate, WallEvidence, wall_candidates
 from .params import PlanParams
 
 #: Two finds on parallel faces are one opening when their intervals along the wall overlap by
@@ -193,7 +193,7 @@ def find_openings(
 #: jamb of the door, on either face of the wall, and that flat wall stops 5-15 cm short of it
 #: where the scan rounds the corner between leaf and frame.
 LEAF_HINGE_M = 0.2
-#: A leaf standing ajar (turned from its wall by :data:`~meshplan.plan.doors.AJAR_MIN_TURN_DEG`
+#: A leaf standing ajar (turned from its wall by :data:`~meshplan.walls.flat.AJAR_MIN_TURN_DEG`
 #: up to :data:`LEAF_MIN_TURN_DEG`) lies within its wall's depth across at least this share of
 #: its door's width (cos 10 degrees, less the rounded corners at hinge and frame): a piece of a
 #: drifting wall beside the door does not.
@@ -247,17 +247,9 @@ def door_leaves(walls: FlatWalls, openings: Openings, params: PlanParams | None 
         hinge = segment_distances(start[cand], end[cand], jamb_s, jamb_e)  # (candidates, 2 jambs)
         # the candidates within the swing of a leaf hinged at each jamb: by it, and no farther
         # from it than the door is wide
-        far = np.stack(
-            [
-                np.maximum(
-                    segment_distances(start[cand], start[cand], jamb_s[j : j + 1], jamb_e[j : j + 1])[:, 0],
-                    segment_distances(end[cand], end[cand], jamb_s[j : j + 1], jamb_e[j : j + 1])[:, 0],
-                )
-                for j in (0, 1)
-            ],
-            axis=1,
-        )
-        swung = (hinge <= LEAF_HINGE_M) & (far <= width + LEAF_HINGE_M)  # (candidates, 2 jambs)
+        to_start = segment_distances(start[cand], start[cand], jamb_s, jamb_e)  # (candidates, 2 jambs)
+        to_end = segment_distances(end[cand], end[cand], jamb_s, jamb_e)
+        swung = (hinge <= LEAF_HINGE_M) & (np.maximum(to_start, to_end) <= width + LEAF_HINGE_M)
         # twice: a piece of a leaf whose end meets the leaf's main face (the corner at its
         # hinge, clustered apart) is taken once that face is known to be a leaf
         for k, L in [*enumerate(cand), *enumerate(cand)]:
@@ -266,9 +258,7 @@ def door_leaves(walls: FlatWalls, openings: Openings, params: PlanParams | None 
             j = int(np.argmin(hinge[k]))
             if not swung[k, j]:
                 continue
-            ends = np.array([start[L], end[L]])
-            reach = segment_distances(ends, ends, jamb_s[j : j + 1], jamb_e[j : j + 1])[:, 0]
-            free = ends[int(np.argmax(reach))]
+            free = end[L] if to_end[k, j] > to_start[k, j] else start[L]
             # other walls the free end may meet: not the door's own wall, not a face parallel
             # to this one, nor another face within the same leaf's swing: the leaf's other face,
             # whose short pieces by the hinge may turn 10-12 degrees from this one (hard seed 1:

@@ -440,10 +440,16 @@ def _deviation(u: FloatArray, v: FloatArray) -> FloatArray:
     return np.abs((u - u[0]) * d[1] - (v - v[0]) * d[0]) / norm
 
 
-#: Degrees a leaf ajar turns from the wall it closes into (:func:`_kinked`): from the 3
-#: degrees the pieces of one drifting wall scatter by, to where a leaf reaches a box's depth
-#: (10 cm) from the wall within its first 0.4 m and its columns stray from their chord anyway.
-KINK_TURN_DEG = (3.0, 15.0)
+#: A surface turned from a wall by this angle (degrees) or more may be a door leaf standing ajar
+#: rather than a piece of the wall; below it a leaf is closed as far as a scan can tell (its free
+#: end 4 cm or less off the wall's plane across a 0.8 m door: a frame's depth and a scan's
+#: noise), within the 3 degrees the pieces of one drifting wall scatter by. Read here
+#: (:func:`_kinked`), by the openings (:mod:`meshplan.plan.doors`) and by the leaves' swings
+#: (:mod:`meshplan.plan.elements`).
+AJAR_MIN_TURN_DEG = 3.0
+#: ... up to this angle (degrees): beyond, a leaf reaches a box's depth (10 cm) from its wall
+#: within its first 0.4 m, leaves the wall's depth, and is an open leaf at an angle.
+AJAR_MAX_TURN_DEG = 15.0
 
 #: The longest leaf ajar (m; see :func:`_kinked`): a wide single door's leaf.
 KINK_LEAF_MAX_M = 1.2
@@ -460,34 +466,43 @@ KINK_CONFIDENCE = 0.999
 KINK_MIN_COLUMNS = 3
 
 
-def _cut_sse(u: FloatArray, v: FloatArray, w: FloatArray) -> FloatArray:
-    """For every cut ``i`` of the columns (``1 .. n-1``): the weighted sum of squared distances
-    of the columns before it from their total least squares line, plus those of the columns
-    from it. One pass over cumulative moments, not two fits per cut."""
+def _moment_sse(c: FloatArray) -> FloatArray:
+    """The weighted sum of squared distances of points from their total least squares line,
+    from their moments ``c`` (rows of sums of ``w, wu, wv, wuu, wvv, wuv``)."""
+    sw = np.maximum(c[:, 0], 1e-300)
+    mu, mv = c[:, 1] / sw, c[:, 2] / sw
+    suu, svv, suv = c[:, 3] - sw * mu * mu, c[:, 4] - sw * mv * mv, c[:, 5] - sw * mu * mv
+    # the smaller eigenvalue of [[suu, suv], [suv, svv]]
+    return np.maximum(0.5 * (suu + svv) - np.sqrt(0.25 * (suu - svv) ** 2 + suv * suv), 0.0)
+
+
+def _cut_sse(u: FloatArray, v: FloatArray, w: FloatArray) -> tuple[FloatArray, float]:
+    """For every cut ``i`` of the columns (``1 .. n-1``): the residual (:func:`_moment_sse`) of
+    the columns before it plus that of the columns from it; and the residual of all of them.
+    One pass over cumulative moments, not two fits per cut."""
     m = np.cumsum(np.c_[w, w * u, w * v, w * u * u, w * v * v, w * u * v], axis=0)
-    left, right = m[:-1], m[-1] - m[:-1]
-
-    def sse(c: FloatArray) -> FloatArray:
-        sw = np.maximum(c[:, 0], 1e-300)
-        mu, mv = c[:, 1] / sw, c[:, 2] / sw
-        suu, svv, suv = c[:, 3] - sw * mu * mu, c[:, 4] - sw * mv * mv, c[:, 5] - sw * mu * mv
-        # the smaller eigenvalue of [[suu, suv], [suv, svv]]
-        return np.maximum(0.5 * (suu + svv) - np.sqrt(0.25 * (suu - svv) ** 2 + suv * suv), 0.0)
-
-    return sse(left) + sse(right)
+    return _moment_sse(m[:-1]) + _moment_sse(m[-1] - m[:-1]), float(_moment_sse(m[-1:])[0])
 
 
 def _kinked(
-    u: FloatArray, v: FloatArray, w: FloatArray, lo: FloatArray, hi: FloatArray, cut: int, sse_two: float, ends: tuple[bool, bool], snap_rad: float
+    u: FloatArray,
+    v: FloatArray,
+    w: FloatArray,
+    lo: FloatArray,
+    hi: FloatArray,
+    cut: int,
+    sse: tuple[float, float],
+    ends: tuple[bool, bool],
+    snap_rad: float,
 ) -> bool:
     """Whether the columns ``(u, v)`` (weights ``w``, spans ``lo`` to ``hi``) are a wall in
     the cluster's direction and a door leaf standing ajar at one of the run's ends, meeting at
-    ``cut``: ``sse_two`` is the residual of the two pieces' lines (:func:`_cut_sse`), ``ends``
+    ``cut``: ``sse`` the residuals of the two pieces' lines and of one line (:func:`_cut_sse`), ``ends``
     tells whether the columns start and end their run, ``snap_rad`` is the walls' snap angle.
 
     One piece keeps the cluster's direction (as in :func:`_own_normal`); the other, at an end
     of the run (a doorway ends it) and no longer than :data:`KINK_LEAF_MAX_M`, turns from it
-    by :data:`KINK_TURN_DEG`, significantly for its columns; and two lines fit the columns
+    by :data:`AJAR_MIN_TURN_DEG` to :data:`AJAR_MAX_TURN_DEG`, significantly for its columns; and two lines fit the columns
     better than one at :data:`KINK_CONFIDENCE`. A leaf ajar by 3-15 degrees
     reaches 4-7 cm past the wall's face over its 0.8 m, so that no column strays a box's
     half-depth from the chord of the run, and the leaf was drawn with the wall as one piece at
@@ -500,9 +515,8 @@ def _kinked(
         return False
     parts = [slice(0, cut), slice(cut, n)]
     fits = [_line_fit(u[p], v[p], w[p]) for p in parts]
-    # as _own_normal: within the snap angle or not significantly off the cluster's direction
-    keeps = [abs(a) <= max(snap_rad, s * float(stdtrit(p.stop - p.start - 2, 0.5 + SNAP_CONFIDENCE / 2))) for (a, s), p in zip(fits, parts)]
-    lo_turn, hi_turn = np.radians(KINK_TURN_DEG)
+    keeps = [_keeps_direction(a, s, p.stop - p.start, snap_rad) for (a, s), p in zip(fits, parts)]
+    lo_turn, hi_turn = np.radians([AJAR_MIN_TURN_DEG, AJAR_MAX_TURN_DEG])
     if not any(
         ends[k] and not keeps[k] and keeps[1 - k] and lo_turn <= abs(fits[k][0]) <= hi_turn and hi[parts[k].stop - 1] - lo[parts[k].start] <= KINK_LEAF_MAX_M
         for k in (0, 1)
@@ -510,7 +524,7 @@ def _kinked(
         return False
     # an F test of two lines against one (two more parameters): the best of every cut, hence
     # the strict level
-    sse_one = float(_cut_sse(np.r_[u, u[-1]], np.r_[v, v[-1]], np.r_[w, 0.0])[-1])  # the whole, cut after its last column
+    sse_two, sse_one = sse
     if sse_two <= 0.0:
         return sse_one > 0.0
     f = ((sse_one - sse_two) / 2.0) / (sse_two / (n - 4))
@@ -525,8 +539,9 @@ def _chords(
     Douglas-Peucker), or that is a wall with a door leaf ajar at the run's end
     (:func:`_kinked`; ``snap_rad`` is the walls' snap angle), is cut where two straight lines
     fit its columns best (the least total squared distance, so that a corner is cut at the
-    corner and a step at the step), when both parts keep ``min_length_m`` and two columns. A wall bent by the drift of the scanner,
-    or curved, becomes chords that each stay on it. Returns ``[start, stop)`` column ranges."""
+    corner and a step at the step), when both parts keep ``min_length_m`` and two columns. A
+    wall bent by the drift of the scanner, or curved, becomes chords that each stay on it.
+    Returns ``[start, stop)`` column ranges."""
     out = []
     stack = [(0, len(u))]
     while stack:
@@ -535,11 +550,12 @@ def _chords(
             cuts = np.arange(a + 2, b - 1)
             cuts = cuts[(hi[cuts - 1] - lo[a] >= min_length_m) & (hi[b - 1] - lo[cuts] >= min_length_m)]
             if len(cuts):
-                total = _cut_sse(u[a:b], v[a:b], w[a:b])[cuts - a - 1]  # cut i is the piece's (i - a)th
+                per_cut, whole = _cut_sse(u[a:b], v[a:b], w[a:b])
+                total = per_cut[cuts - a - 1]  # cut i is the piece's (i - a)th
                 best = int(np.argmin(total))
                 i = int(cuts[best])
                 if _deviation(u[a:b], v[a:b]).max() > tol_m or _kinked(
-                    u[a:b], v[a:b], w[a:b], lo[a:b], hi[a:b], i - a, float(total[best]), (a == 0, b == len(u)), snap_rad
+                    u[a:b], v[a:b], w[a:b], lo[a:b], hi[a:b], i - a, (float(total[best]), whole), (a == 0, b == len(u)), snap_rad
                 ):
                     stack.extend([(i, b), (a, i)])
                     continue
@@ -733,13 +749,20 @@ def _continues(below: list[dict], direction: int, d: FloatArray, offset: FloatAr
     return out
 
 
+def _keeps_direction(angle: float, sigma: float, n: int, snap_rad: float) -> bool:
+    """Whether a piece of wall whose ``n`` columns' line turns ``angle`` (radians, standard
+    error ``sigma``, :func:`_line_fit`) from its cluster's direction keeps that direction:
+    within ``snap_rad`` of it, or not significantly off it (:data:`SNAP_CONFIDENCE`)."""
+    bound = sigma * float(stdtrit(n - 2, 0.5 + SNAP_CONFIDENCE / 2)) if n > 2 else np.inf
+    return abs(angle) <= max(snap_rad, bound)
+
+
 def _own_normal(u: FloatArray, v: FloatArray, w: FloatArray, d: FloatArray, snap_rad: float) -> FloatArray | None:
     """The plan normal of a straight piece of wall from its columns ``(u, v)`` (along and
-    across its cluster's direction ``d``, weights ``w``), or ``None`` where it keeps ``d``:
-    within ``snap_rad`` of it, or not significantly off it (:data:`SNAP_CONFIDENCE`)."""
+    across its cluster's direction ``d``, weights ``w``), or ``None`` where it keeps ``d``
+    (:func:`_keeps_direction`)."""
     angle, sigma = _line_fit(u, v, w)
-    bound = sigma * float(stdtrit(len(u) - 2, 0.5 + SNAP_CONFIDENCE / 2)) if len(u) > 2 else np.inf
-    if abs(angle) <= max(snap_rad, bound):
+    if _keeps_direction(angle, sigma, len(u), snap_rad):
         return None
     t = np.array([-d[1], d[0]])
     return np.cos(angle) * d - np.sin(angle) * t
