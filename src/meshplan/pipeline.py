@@ -90,7 +90,8 @@ def check_not_flat(mesh: Mesh) -> None:
     tensor = ((normals * areas[:, None]).T @ normals) / total
     if np.all(np.isfinite(tensor)) and np.linalg.eigvalsh(tensor)[-1] >= FLAT_SHARE:
         raise GeometryError(
-            f"the scan holds no room: all its {mesh.n_faces:,} faces are parallel (a single wall or floor, or floors and ceilings without walls)",
+            f"the scan holds no room: all its {mesh.n_faces:,} faces are parallel "
+            "(a single wall or floor, or floors and ceilings without walls)",
             "scan the whole room, with its floor and its walls",
         )
 

@@ -414,14 +414,10 @@ def _add_stairs(f, result: Result, storeys: dict, body) -> None:
             aggregate.assign_object(f, products=[part], relating_object=stair)
         ps = pset.add_pset(f, product=stair, name="Pset_StairCommon")
         pset.edit_pset(
-            f,
-            pset=ps,
+            f, pset=ps,
             properties={
-                "NumberOfRiser": int(s.risers),
-                "NumberOfTreads": max(int(s.risers) - 1, 0),
-                "RiserHeight": float(s.rise),
-                "TreadLength": float(s.going),
-                "Reference": "meshplan",
+                "NumberOfRiser": int(s.risers), "NumberOfTreads": max(int(s.risers) - 1, 0), "RiserHeight": float(s.rise),
+                "TreadLength": float(s.going), "Reference": "meshplan",
             },
         )
         ps = pset.add_pset(f, product=stair, name="meshplan")

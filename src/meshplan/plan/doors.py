@@ -379,14 +379,8 @@ class WallEvidence:
         return self.slab_faces(np.zeros(0, np.int64), key, w, d_range, u_range)
 
     def near(
-        self,
-        faces: IntArray,
-        n3: FloatArray,
-        t3: FloatArray,
-        off: float,
-        d_range: tuple[float, float],
-        u_range: tuple[float, float],
-        y_range: tuple[float, float],
+        self, faces: IntArray, n3: FloatArray, t3: FloatArray, off: float,
+        d_range: tuple[float, float], u_range: tuple[float, float], y_range: tuple[float, float],
     ) -> IntArray:
         """The ``faces`` whose reach from their centroid overlaps the box ``d_range`` across,
         ``u_range`` along and ``y_range`` up a wall (a superset of those crossing it)."""
@@ -554,7 +548,11 @@ def _gaps(ev: WallEvidence, w: int, floor: float, ceiling: float) -> list[Candid
     d = tv @ n3 - off
     u = tv @ t3
     y = tv[:, :, 1]
-    keep = (_max3(d) >= far) & (_min3(d) <= near) & (_max3(u) >= lo) & (_min3(u) <= hi) & (_max3(y) >= floor) & (_min3(y) <= ceiling)
+    keep = (
+        (_max3(d) >= far) & (_min3(d) <= near)
+        & (_max3(u) >= lo) & (_min3(u) <= hi)
+        & (_max3(y) >= floor) & (_min3(y) <= ceiling)
+    )
     tri = tv[keep]
     if not len(tri):
         return []
@@ -713,7 +711,6 @@ def _gaps(ev: WallEvidence, w: int, floor: float, ceiling: float) -> list[Candid
     if len(back):
         face = raster(at, near, -RECESS_MIN_M)
         recess = ndimage.binary_closing(raster(cells(_samples(back, cell)), -RECESS_MIN_M, far), structure=np.ones((2, 2))) & ~face
-
         # the depths of the room-facing surfaces, sampled only for a face with a recess that
         # passes the cheap tests (most faces have none)
         def depth() -> tuple[IntArray, IntArray, FloatArray]:
@@ -1491,10 +1488,8 @@ def _panels(ev: WallEvidence, w: int, floor: float, ceiling: float) -> list[Cand
     in_slab = (dmin >= far) & (dmax <= near) & (umin >= walls.u_min[w] - tol) & (umax <= walls.u_max[w] + tol)
     doors = (
         (ymin <= floor + params.opening_margin_m)
-        & (ymax - floor >= params.door_height_m - tol)
-        & (ymax <= ceiling - params.opening_margin_m)
-        & (width >= params.door_width_m[0])
-        & (width <= params.door_width_m[1])
+        & (ymax - floor >= params.door_height_m - tol) & (ymax <= ceiling - params.opening_margin_m)
+        & (width >= params.door_width_m[0]) & (width <= params.door_width_m[1])
     )
     area = ev.mesh.face_areas[faces]
     largest = np.maximum.reduceat(area, seg)
@@ -1503,13 +1498,10 @@ def _panels(ev: WallEvidence, w: int, floor: float, ceiling: float) -> list[Cand
     # missing seam, a decimated piece of a couple of hundred triangles) is not a door
     doors &= largest >= PANEL_PRIMITIVE_SHARE * width * (ymax - ymin)
     windows = (
-        (np.abs(0.5 * (dmin + dmax)) <= PANEL_PLANE_M)
-        & (dmax - dmin <= PANEL_THICKNESS_M)
-        & (ymin >= floor + PANEL_SILL_MIN_M)
-        & (ymax <= ceiling - params.opening_margin_m)
+        (np.abs(0.5 * (dmin + dmax)) <= PANEL_PLANE_M) & (dmax - dmin <= PANEL_THICKNESS_M)
+        & (ymin >= floor + PANEL_SILL_MIN_M) & (ymax <= ceiling - params.opening_margin_m)
         & (ymax - ymin >= params.window_height_m)
-        & (width >= params.window_width_m[0])
-        & (width <= params.window_width_m[1])
+        & (width >= params.window_width_m[0]) & (width <= params.window_width_m[1])
         & (width * (ymax - ymin) >= params.window_area_m2)
         & (largest >= PANEL_PRIMITIVE_SHARE * width * (ymax - ymin))
     )

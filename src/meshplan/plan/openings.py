@@ -99,7 +99,9 @@ class Openings:
         def per_row(values: tuple) -> tuple:
             return tuple(values[i] for i in keep) if values else ()
 
-        faces = tuple(tuple((int(new_index[f]), *rest) for f, *rest in cuts if new_index[f] >= 0) for cuts in per_row(self.faces))
+        faces = tuple(
+            tuple((int(new_index[f]), *rest) for f, *rest in cuts if new_index[f] >= 0) for cuts in per_row(self.faces)
+        )
         return Openings(
             story=self.story[keep],
             kind=tuple(self.kind[i] for i in keep),

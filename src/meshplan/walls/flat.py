@@ -485,15 +485,7 @@ def _cut_sse(u: FloatArray, v: FloatArray, w: FloatArray) -> tuple[FloatArray, f
 
 
 def _kinked(
-    u: FloatArray,
-    v: FloatArray,
-    w: FloatArray,
-    lo: FloatArray,
-    hi: FloatArray,
-    cut: int,
-    sse: tuple[float, float],
-    ends: tuple[bool, bool],
-    snap_rad: float,
+    u: FloatArray, v: FloatArray, w: FloatArray, lo: FloatArray, hi: FloatArray, cut: int, sse: tuple[float, float], ends: tuple[bool, bool], snap_rad: float
 ) -> bool:
     """Whether the columns ``(u, v)`` (weights ``w``, spans ``lo`` to ``hi``) are a wall in
     the cluster's direction and a door leaf standing ajar at one of the run's ends, meeting at
@@ -1160,11 +1152,7 @@ def find_flat_walls(mesh: Mesh, orientation: Orientation, params: WallParams | N
     params = params or WallParams()
     in_stories = orientation.face_story >= 0
     dirs = wall_directions(
-        orientation,
-        params.wall_directions,
-        mesh.face_normals[in_stories],
-        mesh.face_areas[in_stories],
-        params.facing_tolerance_deg,
+        orientation, params.wall_directions, mesh.face_normals[in_stories], mesh.face_areas[in_stories], params.facing_tolerance_deg,
         mesh.face_centroids[in_stories],
     )
     width = params.box_length_m / 2  # columns: the resolution along the wall of a DBSCAN box
@@ -1292,9 +1280,7 @@ def find_flat_walls(mesh: Mesh, orientation: Orientation, params: WallParams | N
             )
         found = _split_at_crossings(_merge(found, params.box_depth_m / 2, params.merge_gap_m), params.min_wall_length_m)
         free = (
-            _free_standing(found, raster, story.floor, ceiling, params)
-            | _pilasters(found, params, raster)
-            | _wall_cores(found, params)
+            _free_standing(found, raster, story.floor, ceiling, params) | _pilasters(found, params, raster) | _wall_cores(found, params)
             | _outer_faces(found, raster, params)
         )
         for r in (r for r, f in zip(found, free) if f):
