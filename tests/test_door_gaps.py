@@ -237,6 +237,31 @@ def test_a_window_whose_head_was_not_scanned_is_found_from_its_sill_and_jambs():
     assert _headless_windows(frame, walls, PlanParams()) == []
 
 
+def test_a_window_whose_head_was_not_scanned_with_a_hole_by_its_jamb_is_found_ragged():
+    """Issue 16 (hard preset, seed 2's W3): the same headless window, with a hole in the scan
+    beside its right jamb (2.2-2.5 m along, from 0.7 m up: under the sill too). The empty region
+    is no rectangle and its bottom edge not straight, so it was no window; it is now the largest
+    rectangle in it, framed on three sides, flagged as ragged (its width, here taken to the
+    hole's far side, is an estimate: the plan gives it a low confidence)."""
+    from meshplan.plan.doors import _headless_windows
+
+    f = _frame(CEILING)
+    grid = np.ones_like(f.grid)
+    top_row = int(round(1.7 / CELL))
+    grid[top_row : grid.shape[0] - f.margin] = False
+    grid[int(round(0.9 / CELL)) : top_row, int(round(1.0 / CELL)) : int(round(2.2 / CELL))] = False
+    walls = SimpleNamespace(u_min=np.array([0.0]), u_max=np.array([3.0]))
+    frame = _Frame(grid, f.lo, f.floor, f.ceiling, f.cell, f.margin, np.zeros(0), np.zeros(0), 0, False, False)
+    (clean,) = _headless_windows(frame, walls, PlanParams())
+    assert not clean.ragged
+    grid[int(round(0.7 / CELL)) : top_row, int(round(2.2 / CELL)) : int(round(2.5 / CELL))] = False
+    frame = _Frame(grid, f.lo, f.floor, f.ceiling, f.cell, f.margin, np.zeros(0), np.zeros(0), 0, False, False)
+    (window,) = _headless_windows(frame, walls, PlanParams())
+    assert window.kind == "window" and window.how == "head unseen" and window.ragged
+    assert window.u_min == pytest.approx(1.0, abs=CELL) and window.u_max == pytest.approx(2.5, abs=CELL)
+    assert window.bottom == pytest.approx(0.9, abs=CELL)
+
+
 # ------------------------------------------------------------- leaves in doorways, heads unseen
 
 

@@ -252,6 +252,39 @@ def test_a_low_front_at_the_edge_of_the_scan_out_of_any_wall_line_is_no_wall() -
     assert sorted(np.round(walls.length, 2)) == pytest.approx([4.0, 4.0, 5.0], abs=0.15)
 
 
+def _window_wall_room(hole_m: float) -> Mesh:
+    """A 6 x 4 m room without a ceiling, its walls scanned to 1.5 m. The wall z = 0 holds a
+    window 2.4 m wide (x 1.5 to 3.9) over a parapet 0.95 m high with its sill (a level surface
+    0.2 m deep into the wall) and its jambs; over the last ``hole_m`` by the right jamb a hole in
+    the scan took the sill and the parapet's top 8 cm."""
+    b = _Builder()
+    w, d, h = 6.0, 4.0, 1.5
+    b.quad([0, 0, 0], [0, 0, d], [w, 0, 0])  # floor, +y
+    b.quad([0, 0, d], [0, h, 0], [w, 0, 0])  # z = d, -z
+    b.quad([0, 0, 0], [0, h, 0], [0, 0, d])  # x = 0, +x
+    b.quad([w, 0, 0], [0, 0, d], [0, h, 0])  # x = w, -x
+    x0, x1, sill = 1.5, 3.9, 0.95
+    b.quad([0, 0, 0], [x0, 0, 0], [0, h, 0])  # z = 0 (+z) left of the window
+    b.quad([x0, 0, 0], [x1 - hole_m - x0, 0, 0], [0, sill, 0])  # the parapet
+    b.quad([x1 - hole_m, 0, 0], [hole_m, 0, 0], [0, sill - 0.08, 0])  # its top in the hole
+    b.quad([x1, 0, 0], [w - x1, 0, 0], [0, h, 0])  # right of the window
+    b.quad([x0, sill, 0], [x1 - hole_m - x0, 0, 0], [0, 0, -0.2])  # the sill, +y
+    b.quad([x0, sill, 0], [0, 0, -0.2], [0, h - sill, 0])  # left jamb, +x
+    b.quad([x1, sill, 0], [0, h - sill, 0], [0, 0, -0.2])  # right jamb, -x
+    return b.mesh()
+
+
+@pytest.mark.parametrize("hole_m", [0.0, 0.5])
+def test_a_window_wider_than_a_door_does_not_split_its_wall(hole_m: float) -> None:
+    """Issue 16 (hard preset, seed 2): the wall under a window (its parapet, with the sill on its
+    top) neither starts nor breaks a wall; where a hole in the scan took the sill by a jamb, the
+    sill of the columns beside still says so (judged over a box length). Before, the 0.5 m
+    without a sill split the wall in two across the 2.4 m window (wider than merge_gap_m), and
+    the window was lost with it."""
+    _, walls = _walls(_window_wall_room(hole_m))
+    assert sorted(np.round(walls.length, 1)) == pytest.approx([4.0, 4.0, 6.0, 6.0], abs=0.15)
+
+
 def test_a_room_scanned_to_1_1_m_gets_its_walls_but_not_its_counter() -> None:
     """A room without a ceiling scanned only up to 1.1 m (below the highest work surface): its
     walls, with nothing scanned behind them, are walls; the 0.9 m counter front, with its top

@@ -221,6 +221,9 @@ class Candidate:
     #: head, with the wall's top), "corner", "panel", "recess" (glazing set back) or "leaf" (a
     #: closed leaf set back)
     how: str
+    #: a hole in the scan ran into its frame: the opening is the largest rectangle in its ragged
+    #: empty region (:func:`_with_ragged_windows`), its width an estimate
+    ragged: bool = False
 
 
 class WallEvidence:
@@ -1175,14 +1178,20 @@ def _jambs_reach_wall_top(f: _Frame, col_top: FloatArray, left: int, right: int)
 def _windows(f: _Frame, walls: FlatWalls, params: PlanParams) -> list[Candidate]:
     """Windows: empty regions with wall below (a sill), above (a head) and beside them, and
     straight edges all round."""
-    nrow, ncol = f.grid.shape
     empty = ~f.grid
-    out = _window_regions(f, walls, params, empty)
-    # a scan hole running into a window's frame (its head, a jamb) joins the window's empty
-    # region, which is then neither a rectangle nor straight-edged: the window is the largest
-    # rectangle of empty cells in the region, held to the same tests and framed by wall along
-    # three of its four sides at least (a hole hides part of one side of a frame; the largest
-    # rectangle in a ragged hole has the rest of the hole beyond two or more of its sides)
+    return _with_ragged_windows(f, walls, params, empty, _window_regions(f, walls, params, empty))
+
+
+def _with_ragged_windows(f: _Frame, walls: FlatWalls, params: PlanParams, empty: np.ndarray, found: list[Candidate]) -> list[Candidate]:
+    """``found`` and the windows whose empty region a scan hole made ragged.
+
+    A scan hole running into a window's frame (its head, a jamb, the sill beside a jamb) joins
+    the window's empty region, which is then neither a rectangle nor straight-edged: the window
+    is the largest rectangle of empty cells in the region, held to the same tests and framed by
+    wall along three of its four sides at least (a hole hides part of one side of a frame; the
+    largest rectangle in a ragged hole has the rest of the hole beyond two or more of its
+    sides)."""
+    nrow, ncol = f.grid.shape
     labels, _ = ndimage.label(empty)
     cores = np.zeros_like(empty)
     # (a region too small to hold a window's rectangle is a scan hole: most are, and the
@@ -1197,8 +1206,9 @@ def _windows(f: _Frame, walls: FlatWalls, params: PlanParams) -> list[Candidate]
         r0, r1, c0, c1 = _largest_rectangle(labels[rs, cs] == k)
         cores[rs.start + r0 : rs.start + r1, cs.start + c0 : cs.start + c1] = True
     if cores.any():
-        out += [c for c in _window_regions(f, walls, params, cores, framed_sides=3) if not any(_overlap(c, o) for o in out)]
-    return out
+        ragged = [replace(c, ragged=True) for c in _window_regions(f, walls, params, cores, framed_sides=3)]
+        found = found + [c for c in ragged if not any(_overlap(c, o) for o in found)]
+    return found
 
 
 #: Head given to a window whose head was not scanned (m above its floor): the line of the door
@@ -1232,8 +1242,9 @@ def _headless_windows(f: _Frame, walls: FlatWalls, params: PlanParams) -> list[C
         return []
     grid = g.copy()
     grid[top_row + 1 :] = True  # the unscanned band: wall, as far as a window is concerned
+    banded, empty = replace(f, grid=grid), _tall_runs(~grid, f.cell, params)
     out = []
-    for c in _window_regions(replace(f, grid=grid), walls, params, _tall_runs(~grid, f.cell, params)):
+    for c in _with_ragged_windows(banded, walls, params, empty, _window_regions(banded, walls, params, empty)):
         if c.top >= scanned_top - EDGE_CELLS * cell:  # up to where the scan stopped
             out.append(replace(c, top=max(c.top, f.floor + WINDOW_HEAD_ASSUMED_M), how="head unseen"))
     return out

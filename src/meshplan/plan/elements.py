@@ -807,6 +807,8 @@ def opening_elements(
         elif i < len(openings.closed) and openings.closed[i]:
             # a recess of a door's shape: a closed door's leaf set back in its frame, or a niche
             level, why = "low", "a closed leaf set back in its frame, or a niche of a door's shape: check on site"
+        elif i < len(openings.ragged) and openings.ragged[i]:
+            level, why = "low", "part of its frame hidden by a hole in the scan: its width is an estimate"
         elif len(seen_sides) >= 2:
             level, why = "high", "frame seen on both faces of its wall"
         elif seen_sides:

@@ -68,6 +68,9 @@ class Openings:
     #: (:data:`meshplan.plan.doors.LEAF_SET_BACK_M`): a recess of a door's shape, which a
     #: closed door and a niche of that shape both are. Empty: none was.
     closed: tuple[bool, ...] = ()
+    #: Per opening, whether a hole in the scan hid part of its frame in every face it was found
+    #: in (:attr:`meshplan.plan.doors.Candidate.ragged`): its width is an estimate. Empty: none.
+    ragged: tuple[bool, ...] = ()
 
     def __len__(self) -> int:
         return int(len(self.wall))
@@ -113,6 +116,7 @@ class Openings:
             faces=faces,
             source=per_row(self.source),
             closed=per_row(self.closed),
+            ragged=per_row(self.ragged),
         )
 
     def to_list(self, walls: FlatWalls, ndigits: int = 4) -> list[dict]:
@@ -188,6 +192,7 @@ def find_openings(
         top=np.array([r[5] for r in rows]),
         faces=tuple(r[6] for r in rows),
         closed=tuple(bool(r[7]) for r in rows),
+        ragged=tuple(bool(r[8]) for r in rows),
     )
 
 
@@ -304,7 +309,7 @@ def _without_leaf_windows(found: list[Candidate], walls: FlatWalls, params: Plan
 
 
 def _merge(found: list[Candidate], walls: FlatWalls, physical: tuple[PhysicalWall, ...], params: PlanParams) -> list[tuple]:
-    """One row ``(kind, wall, u_min, u_max, bottom, top, cuts, closed)`` per physical opening.
+    """One row ``(kind, wall, u_min, u_max, bottom, top, cuts, closed, ragged)`` per physical opening.
 
     Finds of one kind on parallel faces of a story whose planes lie within a wall's depth and
     whose intervals overlap, along the wall and in height, are the same opening (union-find
@@ -387,4 +392,5 @@ def _one_opening(cands: list[Candidate], walls: FlatWalls, partner: dict[int, tu
         if b > a:
             cuts.append((int(f), a, b, float(bottom), float(top)))
     closed = all(c.how == "leaf" for c in cands)
-    return (kind, int(wall), float(u0), float(u1), float(bottom), float(top), tuple(cuts), closed)
+    ragged = all(c.ragged for c in cands)
+    return (kind, int(wall), float(u0), float(u1), float(bottom), float(top), tuple(cuts), closed, ragged)

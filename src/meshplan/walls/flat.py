@@ -1351,7 +1351,8 @@ def _wall_columns(
     reaches |= edge & (top >= floor + EDGE_WALL_MIN_TOP_M)
     above_work = top > floor + params.max_work_surface_m
     seen = cols.top - cols.bottom >= MIN_COLUMN_SPAN_SHARE * (target - floor)
-    furniture_top = top_attached(raster, normal, cols, width) >= MIN_TOP_SHARE
+    top_share = top_attached(raster, normal, cols, width)
+    furniture_top = top_share >= MIN_TOP_SHARE
     hidden = hidden_behind(cols, params.context_m, params.max_wall_thickness_m, params.max_work_surface_m)
     # at the edge of the scan, with no top attached and nothing flush behind it (a thin box
     # against a wall), a column seen above seat backs is a wall whose top the scan did not
@@ -1363,7 +1364,10 @@ def _wall_columns(
     # has its worktop: too little to tell alone, it neither starts nor breaks a run of wall
     # columns in its plane (:func:`meshplan.walls.evidence.runs`); a front 0.6 m before the
     # wall it stands against lies in a plane of its own
-    parapet = furniture_top & ~hidden & (cols.top >= floor + PARAPET_MIN_M) & (cols.top <= floor + params.max_work_surface_m)
+    # (its sill judged over a box length, as its top: a hole in the scanned sill, often against
+    # a jamb, does not make the column under it a break in the wall)
+    sill = neighbour_max(cols, top_share) >= MIN_TOP_SHARE
+    parapet = sill & ~hidden & (cols.top >= floor + PARAPET_MIN_M) & (cols.top <= floor + params.max_work_surface_m)
     # a wall grazed at the edge of the scan: the sensor's rays met it ever more obliquely, so its
     # end is seen lower and lower (1.5-2 m where the rest reaches the ceiling). Such a column,
     # risen above the work surfaces with no top attached and nothing behind it, and seen over
