@@ -214,35 +214,11 @@ def test_a_jamb_on_a_piece_scanned_lower_than_the_next_is_a_headless_door(piece_
     assert [(c.how, round(c.u_min, 2), round(c.u_max, 2)) for c in found] == ([("head unseen", 1.0, 1.85)] if door else [])
 
 
-def test_a_window_whose_head_was_not_scanned_is_found_from_its_sill_and_jambs():
-    """A face scanned to 1.7 m (nothing above) with an empty rectangle from a 0.9 m sill up to
-    where the scan stopped, 1.0-2.2 m along: a window with an assumed head. The same face with
-    the gap running down to the floor holds no window (a doorway, which the door search reads)."""
-    from meshplan.plan.doors import WINDOW_HEAD_ASSUMED_M, _headless_windows
-
-    f = _frame(CEILING)
-    grid = np.ones_like(f.grid)
-    top_row = int(round(1.7 / CELL))
-    grid[top_row : grid.shape[0] - f.margin] = False
-    grid[int(round(0.9 / CELL)) : top_row, int(round(1.0 / CELL)) : int(round(2.2 / CELL))] = False
-    walls = SimpleNamespace(u_min=np.array([0.0]), u_max=np.array([3.0]))
-    frame = _Frame(grid, f.lo, f.floor, f.ceiling, f.cell, f.margin, np.zeros(0), np.zeros(0), 0, False, False)
-    (window,) = _headless_windows(frame, walls, PlanParams())
-    assert window.kind == "window" and window.how == "head unseen"
-    assert window.u_min == pytest.approx(1.0, abs=CELL) and window.u_max == pytest.approx(2.2, abs=CELL)
-    assert window.bottom == pytest.approx(0.9, abs=CELL) and window.top == pytest.approx(WINDOW_HEAD_ASSUMED_M)
-    grid[: int(round(0.9 / CELL)), int(round(1.0 / CELL)) : int(round(2.2 / CELL))] = False
-    grid[: f.margin] = True
-    frame = _Frame(grid, f.lo, f.floor, f.ceiling, f.cell, f.margin, np.zeros(0), np.zeros(0), 0, False, False)
-    assert _headless_windows(frame, walls, PlanParams()) == []
-
-
-def test_a_window_whose_head_was_not_scanned_with_a_hole_by_its_jamb_is_found_ragged():
-    """Issue 16 (hard preset, seed 2's W3): the same headless window, with a hole in the scan
-    beside its right jamb (2.2-2.5 m along, from 0.7 m up: under the sill too). The empty region
-    is no rectangle and its bottom edge not straight, so it was no window; it is now the largest
-    rectangle in it, framed on three sides, flagged as ragged (its width, here taken to the
-    hole's far side, is an estimate: the plan gives it a low confidence)."""
+def _headless_window_face(hole: bool = False, to_floor: bool = False) -> list:
+    """The windows :func:`meshplan.plan.doors._headless_windows` finds in a face scanned to 1.7 m
+    (nothing above) with an empty rectangle from a 0.9 m sill up to where the scan stopped,
+    1.0-2.2 m along; with ``hole``, a hole in the scan beside its right jamb (2.2-2.5 m along,
+    from 0.7 m up: under the sill too); with ``to_floor``, the gap running down to the floor."""
     from meshplan.plan.doors import _headless_windows
 
     f = _frame(CEILING)
@@ -250,13 +226,34 @@ def test_a_window_whose_head_was_not_scanned_with_a_hole_by_its_jamb_is_found_ra
     top_row = int(round(1.7 / CELL))
     grid[top_row : grid.shape[0] - f.margin] = False
     grid[int(round(0.9 / CELL)) : top_row, int(round(1.0 / CELL)) : int(round(2.2 / CELL))] = False
+    if hole:
+        grid[int(round(0.7 / CELL)) : top_row, int(round(2.2 / CELL)) : int(round(2.5 / CELL))] = False
+    if to_floor:
+        grid[f.margin : int(round(0.9 / CELL)), int(round(1.0 / CELL)) : int(round(2.2 / CELL))] = False
     walls = SimpleNamespace(u_min=np.array([0.0]), u_max=np.array([3.0]))
     frame = _Frame(grid, f.lo, f.floor, f.ceiling, f.cell, f.margin, np.zeros(0), np.zeros(0), 0, False, False)
-    (clean,) = _headless_windows(frame, walls, PlanParams())
-    assert not clean.ragged
-    grid[int(round(0.7 / CELL)) : top_row, int(round(2.2 / CELL)) : int(round(2.5 / CELL))] = False
-    frame = _Frame(grid, f.lo, f.floor, f.ceiling, f.cell, f.margin, np.zeros(0), np.zeros(0), 0, False, False)
-    (window,) = _headless_windows(frame, walls, PlanParams())
+    return _headless_windows(frame, walls, PlanParams())
+
+
+def test_a_window_whose_head_was_not_scanned_is_found_from_its_sill_and_jambs():
+    """A window with an assumed head; the same face with the gap running down to the floor
+    holds no window (a doorway, which the door search reads)."""
+    from meshplan.plan.doors import WINDOW_HEAD_ASSUMED_M
+
+    (window,) = _headless_window_face()
+    assert window.kind == "window" and window.how == "head unseen" and not window.ragged
+    assert window.u_min == pytest.approx(1.0, abs=CELL) and window.u_max == pytest.approx(2.2, abs=CELL)
+    assert window.bottom == pytest.approx(0.9, abs=CELL) and window.top == pytest.approx(WINDOW_HEAD_ASSUMED_M)
+    assert _headless_window_face(to_floor=True) == []
+
+
+def test_a_window_whose_head_was_not_scanned_with_a_hole_by_its_jamb_is_found_ragged():
+    """Issue 16 (hard preset, seed 2's W3): the same headless window with a hole in the scan
+    beside its jamb. The empty region is no rectangle and its bottom edge not straight, so it
+    was no window; it is now the largest rectangle in it, framed on three sides, flagged as
+    ragged (its width, here taken to the hole's far side, is an estimate: the plan gives it a
+    low confidence)."""
+    (window,) = _headless_window_face(hole=True)
     assert window.kind == "window" and window.how == "head unseen" and window.ragged
     assert window.u_min == pytest.approx(1.0, abs=CELL) and window.u_max == pytest.approx(2.5, abs=CELL)
     assert window.bottom == pytest.approx(0.9, abs=CELL)
