@@ -146,6 +146,24 @@ def test_axial_peaks_ignore_the_sign():
     assert angle_deg(peaks[0].axis, up) < 1.0 or angle_deg(peaks[0].axis, -up) < 1.0
 
 
+def test_axial_peaks_sit_on_exact_directions_however_they_are_turned():
+    """A parametric model's normals: a few exact directions (floor and ceiling up, four walls).
+    Turned at random, each peak lies on its direction. Before sphere._cap_mode, in 133 of 200
+    turns a peak stayed on a histogram bin 8.0-9.8 degrees off its direction (the cap around
+    the bin's centre held none of the directions the bin counted)."""
+    from scipy.spatial.transform import Rotation
+
+    dirs = np.array([[0, 1, 0], [0, -1, 0], [1, 0, 0], [-1, 0, 0], [0, 0, 1], [0, 0, -1]], float)
+    w = np.array([28.5, 20.0, 25.0, 25.0, 21.0, 21.0])
+    worst = 0.0
+    for seed in range(200):
+        turn = Rotation.random(random_state=seed).as_matrix()
+        peaks = axial_peaks(dirs @ turn.T, w)
+        for axis in (turn @ dirs[0], turn @ dirs[2], turn @ dirs[4]):
+            worst = max(worst, min(min(angle_deg(p.axis, axis), angle_deg(p.axis, -axis)) for p in peaks))
+    assert worst < 1e-6
+
+
 # --------------------------------------------------------------------------------------------
 # box DBSCAN
 

@@ -170,6 +170,61 @@ def _hemisphere_bins(n: int, radius_deg: float) -> tuple[FloatArray, cKDTree, cs
     return _HEMI_CACHE[key]
 
 
+#: Rounds of :func:`_cap_mode` at most. Over the peaks of the 18 real scans and three synthetic
+#: presets, 75 of 121 caps stopped moving by :data:`CAP_MODE_SETTLED_DEG` within 2-7 rounds; the
+#: others creep along a broad mode (a noisy scan's walls), where the up search refines the axis
+#: it takes anyway (:func:`meshplan.orient.gravity._refine_kmeans`).
+CAP_MODE_ROUNDS = 8
+#: The cap's mean has settled when a round moves it less than this (degrees).
+CAP_MODE_SETTLED_DEG = 0.01
+
+
+def _bin_spacing_rad(bins: int) -> float:
+    """Typical angle (radians) between neighbouring centres of ``2 * bins`` Fibonacci points on
+    the sphere: the side of a square of the sphere's area shared among them."""
+    return float(np.sqrt(4.0 * np.pi / (2 * bins)))
+
+
+def _cap_mode(d: FloatArray, w: FloatArray, start: FloatArray, cos_r: float, cos_first: float | None = None) -> FloatArray:
+    """The weighted mean axis of the sign-aligned directions ``d`` in the cap of angular radius
+    ``arccos(cos_r)`` around it (a mean shift from ``start``; the first cap ``arccos(cos_first)``
+    when given).
+
+    A bin's weight counts the directions binned within the cap's radius of it, which lie up to
+    half a bin further than that from its centre; of several bins that hold the same
+    directions (a parametric model's floor, every normal exactly up) the first in order wins,
+    up to that far off the axis. The mean of the cap around its centre alone then missed them
+    and the bin's centre was kept: on a RoomPlan room turned at random, the floor's candidate
+    stayed 7.9 degrees off its normal in 6 turns of 20 (and lost to a wall pair); on six exact
+    directions, a peak stayed 8-10 degrees off in 133 turns of 200. The first mean takes every
+    direction the bin counted, and re-centring the cap on its mean until it stays puts it on
+    the mode, whatever the turn."""
+    widest = min(cos_r, cos_r if cos_first is None else cos_first)
+    # the rounds look at the directions near the cap only: those within twice its reach of
+    # where the subset was taken, taken again when the cap has moved further than its reach
+    reach = float(np.arccos(np.clip(widest, -1.0, 1.0)))
+    cos_subset = np.cos(min(2.0 * reach, np.pi / 2))
+    axis = centre = start
+    dots = d @ start
+    near = np.abs(dots) >= cos_subset
+    dn, wn = d[near], w[near]
+    for round_ in range(CAP_MODE_ROUNDS):
+        if axis @ centre < np.cos(reach):
+            centre = axis
+            near = np.abs(d @ centre) >= cos_subset
+            dn, wn = d[near], w[near]
+        dots = dn @ axis
+        cap = np.abs(dots) >= (cos_first if round_ == 0 and cos_first is not None else cos_r)
+        if not cap.any():
+            return axis
+        s = np.sign(dots[cap])[:, None]
+        new = unit((dn[cap] * s * wn[cap, None]).sum(axis=0))
+        if new @ axis >= np.cos(np.radians(CAP_MODE_SETTLED_DEG)):
+            return new
+        axis = new
+    return axis
+
+
 @dataclass(frozen=True)
 class AxialPeak:
     """A dominant axis (sign ignored) among a set of directions."""
@@ -220,15 +275,10 @@ def axial_peaks(
         cand = b[j]
         if any(abs(float(cand @ p.axis)) >= cos_sep for p in peaks):
             continue
-        # refine: weighted mean of the sign-aligned directions in the cap
-        dots = d @ cand
-        cap = np.abs(dots) >= cos_r
-        if cap.any():
-            s = np.sign(dots[cap])[:, None]
-            axis = unit((d[cap] * s * w[cap, None]).sum(axis=0))
-        else:
-            axis = cand
-        peaks.append(AxialPeak(axis=axis, weight=float(smooth[j])))
+        # (the cap's weight counts every direction binned within radius_deg of the bin, up to
+        # half a bin further: the first mean takes them all)
+        first = np.cos(np.radians(radius_deg) + _bin_spacing_rad(bins))
+        peaks.append(AxialPeak(axis=_cap_mode(d, w, cand, cos_r, first), weight=float(smooth[j])))
         if len(peaks) >= count:
             break
     return peaks
