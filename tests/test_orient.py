@@ -355,3 +355,22 @@ def test_walls_standing_below_the_floor_turn_a_weak_sign_over():
     assert o.gravity.sign_by == "walls on the floor"
     with pytest.raises(GeometryError, match="no floor found"):  # the user's up is not overruled
         orient(scan.mesh, OrientParams(), up_hint=-o.gravity.up)
+
+
+def test_a_model_of_big_boxes_in_metres_is_no_unit_mistake():
+    """A room modelled with triangles 2 m across (a RoomPlan or CAD export without furniture:
+    two triangles a wall) is a building in metres. Its median triangle exceeds what scans make,
+    which the scale check took for a unit mistake on its own (a clustered RoomPlan room, 1.1 m
+    triangles: "no unit makes it a plausible building"); its size says metres."""
+    from conftest import box_room
+    from meshplan.geometry import Mesh
+
+    v, f = box_room(5.0, 4.0, 2.6, cell=2.0)
+    mesh = Mesh(v, f)
+    assert np.sqrt(2.0 * np.median(mesh.face_areas)) > 1.0
+    o = orient(mesh)
+    assert o.transform[1, :3] @ np.array([0.0, 1.0, 0.0]) > np.cos(np.radians(1.0))
+    assert o.stories[0].height == pytest.approx(2.6, abs=0.1)  # (2.55: the levels of 32 faces)
+    # the same model in centimetres is still refused (2.6 m tall in no direction)
+    with pytest.raises(GeometryError, match="implausible scale.*--units"):
+        orient(Mesh(v * 100.0, f))

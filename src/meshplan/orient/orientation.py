@@ -17,7 +17,10 @@ from .levels import Levels, find_levels
 from .params import OrientParams
 from .stories import Story, assign_faces, split_stories
 
-#: Largest plausible median triangle size (m): HoloLens and phone scans make 1-10 cm triangles.
+#: Largest plausible median triangle size (m) of a scan: HoloLens and phone scans make 1-10 cm
+#: triangles. Larger ones are refused as a unit mistake only where the scan is also taller than a
+#: story in every direction (:func:`_check_scale`): a model of boxes (RoomPlan's walls and
+#: furniture, a CAD export) has triangles of 1-4 m and a building's size.
 _MAX_TRIANGLE_SIZE_M = 1.0
 
 #: Above this many faces the up direction, the levels and the wall directions are estimated on
@@ -109,14 +112,20 @@ class Orientation:
 
 
 def _check_scale(mesh: Mesh, params: OrientParams) -> None:
+    """Refuse a scan whose triangles and size both say its units are not metres (see
+    :data:`_MAX_TRIANGLE_SIZE_M`), suggesting the unit that makes both plausible."""
     size = float(np.sqrt(2.0 * np.median(mesh.face_areas)))
     if size > _MAX_TRIANGLE_SIZE_M:
         lo, hi = mesh.bounds()
         extent = np.sort(hi - lo)
+        if extent[0] <= params.max_story_height_m:
+            # a story's height fits in one direction at least: a model of boxes in metres (a
+            # RoomPlan room without its furniture's small faces: 1.1 m triangles), not a unit
+            # mistake; the stories' heights are checked once found
+            return
         problem = f"implausible scale: the median triangle is {size:.3g} m across"
-        if extent[0] > params.max_story_height_m:
-            # every direction is taller than a story: whichever is up, the stories are implausible
-            problem += f" and the scan measures at least {extent[0]:,.0f} m in every direction, an implausible story height"
+        # every direction is taller than a story: whichever is up, the stories are implausible
+        problem += f" and the scan measures at least {extent[0]:,.0f} m in every direction, an implausible story height"
         hint = "check the units of the scan (--units)"
         for unit, factor in (("mm", 0.001), ("cm", 0.01), ("in", 0.0254)):
             # suggest a unit only when it makes both the triangles and the building plausible
