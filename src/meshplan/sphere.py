@@ -265,6 +265,9 @@ def axial_peaks(
     _, idx = tree.query(d)
     hist = np.bincount(idx % nb, weights=w, minlength=nb)
     cos_r = np.cos(np.radians(radius_deg))
+    # a bin's weight counts every direction binned within radius_deg of it, up to half a bin
+    # further from its centre: the first mean of its cap takes them all (:func:`_cap_mode`)
+    cos_first = np.cos(np.radians(radius_deg) + _bin_spacing_rad(bins))
     smooth = near @ hist
     order = np.argsort(-smooth, kind="stable")
     cos_sep = np.cos(np.radians(separation_deg))
@@ -275,10 +278,7 @@ def axial_peaks(
         cand = b[j]
         if any(abs(float(cand @ p.axis)) >= cos_sep for p in peaks):
             continue
-        # (the cap's weight counts every direction binned within radius_deg of the bin, up to
-        # half a bin further: the first mean takes them all)
-        first = np.cos(np.radians(radius_deg) + _bin_spacing_rad(bins))
-        peaks.append(AxialPeak(axis=_cap_mode(d, w, cand, cos_r, first), weight=float(smooth[j])))
+        peaks.append(AxialPeak(axis=_cap_mode(d, w, cand, cos_r, cos_first), weight=float(smooth[j])))
         if len(peaks) >= count:
             break
     return peaks
