@@ -152,3 +152,22 @@ def test_real_scans_are_not_refused(name):
     result = meshplan.run(SCANS / name, output=None)
     assert result.stories
     assert not [w for w in result.warnings if "unit" in w]
+
+
+@pytest.mark.realscan
+def test_a_scan_in_feet_that_fails_to_orient_in_metres_is_named_in_feet(tmp_path):
+    """hl1_ashro (a room without a ceiling) in feet, read as metres: orienting fails for want of
+    a floor (most of its wall area lies below its lowest level surface at that scale). Without
+    --units the other units are tried then too, and the error names feet (before: "make sure
+    the scan includes the floor, or name the up axis with --up")."""
+    from meshplan.io import load_mesh
+
+    path = SCANS / "hl1_ashro_room_45deg.obj"
+    if not path.is_file():
+        pytest.skip("real scan hl1_ashro_room_45deg.obj not available (../shared/scans)")
+    mesh = load_mesh(path).mesh
+    feet = _write_obj(tmp_path / "ashro_ft.obj", mesh.vertices * PER_M["ft"], mesh.faces)
+    with pytest.raises(GeometryError) as err:
+        meshplan.run(feet, output=None)
+    assert "looks like it is in feet" in str(err.value) and "--units ft" in str(err.value)
+    assert meshplan.run(feet, output=None, units="ft").stories[0].story.floor == pytest.approx(0.0)

@@ -18,7 +18,9 @@ The rules (the thresholds are the constants below):
   stories are accepted as they are. A tall story is accepted unless another unit makes every
   story ordinary; then the scan is refused, naming both readings (6.6-8.5 m is also 6.6-8.5 ft,
   the most common ceiling height of houses in feet). Anything else is refused, naming the unit
-  that makes it ordinary (the nearest to :data:`TYPICAL_STORY_M` when several do).
+  that makes it ordinary (the nearest to :data:`TYPICAL_STORY_M` when several do). A scan that
+  cannot be oriented at all in them (no floor found, no walls) is oriented in the other units
+  too: one that makes it an ordinary building is named beside the error.
 * Units given explicitly: trusted while the stories are possible in them (from the minimum up
   to ``max_story_height_m``), with a warning when another unit would make a tall story
   ordinary; refused with the right unit when the stories are impossible (``--units cm`` on a
@@ -347,7 +349,11 @@ def orient_plausibly(
     # taller than HALL_MAX_M without --units: the other unit is named, the hall only in the hint
     hall_hint = building and chosen.grade(params.max_story_height_m) == "tall"
     others = []
-    if hall or _scale_related(chosen):
+    # orienting may also fail for want of a floor or walls at a building's scale (a scan in feet
+    # read as metres: "no floor found" on hl1_ashro): without --units the other units are tried
+    # then too, and the error stands unless one of them makes an ordinary building
+    failed = chosen.orientation is None and not units_explicit
+    if hall or _scale_related(chosen) or failed:
         for u in UNITS_M:
             if u == units:
                 continue
