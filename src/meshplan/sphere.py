@@ -199,7 +199,7 @@ def _cap_mode(d: FloatArray, w: FloatArray, start: FloatArray, cos_r: float, cos
     directions, a peak stayed 8-10 degrees off in 133 turns of 200. The first mean takes every
     direction the bin counted, and re-centring the cap on its mean until it stays puts it on
     the mode, whatever the turn."""
-    widest = min(cos_r, cos_r if cos_first is None else cos_first)
+    widest = cos_r if cos_first is None else min(cos_r, cos_first)
     # the rounds look at the directions near the cap only: those within twice its reach of
     # where the subset was taken, taken again when the cap has moved further than its reach
     reach = float(np.arccos(np.clip(widest, -1.0, 1.0)))

@@ -328,9 +328,9 @@ def _room_ref(x: Any, numbers: list[str]) -> str:
 
 def _swung_door(swing: Any, walls: Any, face: int, jambs: tuple[float, float], pw: Any, u_center: float, width: float) -> tuple[str, np.ndarray, np.ndarray]:
     """An IfcDoor whose leaf the scan showed (found in flat wall ``face`` between ``jambs``,
-    along it): its OperationType and placement (plan origin and local x direction). IFC opens a door towards its placement's +y and names the hand looking
-    that way ("hinges on the left side as viewed in the direction of the positive y-axis"):
-    local x runs along the wall so that +y (z x x, with z up) points into the room the leaf
+    along it): its OperationType and placement (plan origin and local x direction). IFC opens a
+    door towards its placement's +y and names the hand looking that way ("hinges on the left
+    side as viewed in the direction of the positive y-axis"): local x runs along the wall so that +y (z x x, with z up) points into the room the leaf
     opens into (:func:`meshplan.plan.symbols.door_frame`), from the jamb at local x = 0, and
     the door is SINGLE_SWING_LEFT when its hinge is at that jamb. Before, every door was placed
     along its physical wall's direction and named by the hand seen from the room it opens into,

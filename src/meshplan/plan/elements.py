@@ -144,9 +144,9 @@ LEAF_MAX_OPEN_DEG = 120.0
 LEAF_FIT_RMS_M = 0.03
 LEAF_FIT_HINGE_MAX_DEG = 75.0
 #: A leaf standing ajar, within a few degrees of its closed position (from
-#: :data:`~meshplan.walls.flat.AJAR_MIN_TURN_DEG` to :data:`~meshplan.walls.flat.AJAR_MAX_TURN_DEG`), hardly leaves
-#: the wall's depth and looks the same seen from either jamb; it is the line fitted through the
-#: faces standing in the doorway (within the wall's depth and this far (m) beyond either face),
+#: :data:`~meshplan.walls.flat.AJAR_MIN_TURN_DEG` to
+#: :data:`~meshplan.walls.flat.AJAR_MAX_TURN_DEG`), hardly leaves the wall's depth and looks the
+#: same seen from either jamb; it is the line fitted through the faces standing in the doorway (within the wall's depth and this far (m) beyond either face),
 #: spanning at least :data:`AJAR_LEAF_SPAN_SHARE` of the door, and its hinge is the end nearer
 #: the middle of the wall: a leaf closes into its frame, and the free end is the one that left.
 AJAR_BEYOND_M = 0.25
@@ -632,8 +632,9 @@ def _panel_line(p: FloatArray, normal: FloatArray, w: FloatArray) -> tuple[Float
 
 
 def _ajar_leaf(near: _Near, band: np.ndarray, n: FloatArray, t: FloatArray, off: float, u0: float, u1: float, thickness: float) -> tuple[int, Swing] | None:
-    """A leaf standing ajar in the doorway ``[u0, u1]`` (:data:`~meshplan.walls.flat.AJAR_MAX_TURN_DEG`): ``(side,
-    swing)`` as :func:`door_leaf` gives, or ``None``."""
+    """A leaf standing ajar in the doorway ``[u0, u1]``
+    (:data:`~meshplan.walls.flat.AJAR_MAX_TURN_DEG`): ``(side, swing)`` as :func:`door_leaf`
+    gives, or ``None``."""
     width = u1 - u0
     u = near.xz @ t
     a = near.xz @ n - off

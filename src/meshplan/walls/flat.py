@@ -489,16 +489,17 @@ def _kinked(
 ) -> bool:
     """Whether the columns ``(u, v)`` (weights ``w``, spans ``lo`` to ``hi``) are a wall in
     the cluster's direction and a door leaf standing ajar at one of the run's ends, meeting at
-    ``cut``: ``sse`` the residuals of the two pieces' lines and of one line (:func:`_cut_sse`), ``ends``
-    tells whether the columns start and end their run, ``snap_rad`` is the walls' snap angle.
+    ``cut``: ``sse`` the residuals of the two pieces' lines and of one line (:func:`_cut_sse`),
+    ``ends`` tells whether the columns start and end their run, ``snap_rad`` is the walls'
+    snap angle.
 
     One piece keeps the cluster's direction (as in :func:`_own_normal`); the other, at an end
     of the run (a doorway ends it) and no longer than :data:`KINK_LEAF_MAX_M`, turns from it
-    by :data:`AJAR_MIN_TURN_DEG` to :data:`AJAR_MAX_TURN_DEG`, significantly for its columns; and two lines fit the columns
-    better than one at :data:`KINK_CONFIDENCE`. A leaf ajar by 3-15 degrees
-    reaches 4-7 cm past the wall's face over its 0.8 m, so that no column strays a box's
-    half-depth from the chord of the run, and the leaf was drawn with the wall as one piece at
-    the angle between them (hard seed 10: 1.85 degrees, across the doorway). A wall bent by
+    by :data:`AJAR_MIN_TURN_DEG` to :data:`AJAR_MAX_TURN_DEG`, significantly for its columns;
+    and two lines fit the columns better than one at :data:`KINK_CONFIDENCE`. A leaf ajar by
+    3-15 degrees reaches 4-7 cm past the wall's face over its 0.8 m, so that no column strays a
+    box's half-depth from the chord of the run, and the leaf was drawn with the wall as one
+    piece at the angle between them (hard seed 10: 1.85 degrees, across the doorway). A wall bent by
     the scanner's drift turns along its length, by less, or turns both of its pieces: it stays
     one piece, as before.
     """
