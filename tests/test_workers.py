@@ -161,7 +161,9 @@ def test_ctrl_c_is_one_line(apartment, tmp_path):
     lines = [line for line in text.splitlines() if line.strip()]
     assert code != 0, text
     assert "Traceback" not in text, text
-    assert len(lines) == 1 and lines[0].startswith("error: "), text
+    # (the status too: once, in a full make test on a loaded machine, the run ended with a
+    # non-zero status and nothing on stderr; 21 runs since, 15 of them under load, did not)
+    assert len(lines) == 1 and lines[0].startswith("error: "), (code, text)
     assert not survivors, f"workers {survivors} outlived the interrupted run"
     assert not out.exists()
 
