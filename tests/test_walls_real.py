@@ -28,6 +28,7 @@ from meshplan.io import load_mesh
 from meshplan.orient import orient
 from meshplan.orient.params import OrientParams
 from meshplan.walls import find_flat_walls
+from meshplan.walls.params import WallParams
 
 TRUTH = SHARED / "truth"
 
@@ -262,6 +263,26 @@ def test_walls_at_the_edge_of_the_scan_keep_their_lost_tops_and_hidden_feet() ->
     o, walls = _walls(b.mesh())
     assert o.stories[0].ceiling_found
     assert sorted(np.round(walls.length, 1)) == pytest.approx([4.0, 4.0, 5.0, 5.0], abs=0.15)
+
+
+def test_a_short_patch_facing_back_in_front_of_a_wall_does_not_take_the_wall_with_it() -> None:
+    """hl1_mrtk's only floor-to-ceiling wall (3.6 m) was lost in one frame of the plan out of
+    two: a 0.45 m patch 7 cm in front of it, wound the other way (a headset's second layer of
+    the same surface), faced back at it, and the two were taken for the inner faces of a wall
+    modelled by its two sides (flat._wall_cores), both dropped. The core of a face lies behind
+    most of the face itself; here it is the patch's, and only the patch goes. Two faces of equal
+    length facing each other across 7 cm (a wall modelled by two thin boxes) both still go."""
+    from meshplan.walls.flat import _wall_cores
+
+    def row(normal, offset, u_min, u_max):
+        return {"normal": normal, "offset": offset, "u_min": u_min, "u_max": u_max}
+
+    wall = row((1.0, 0.0), 0.0, 0.0, 3.6)  # x = 0, facing +x, z 0 to 3.6 (tangent +z)
+    patch = row((-1.0, 0.0), -0.07, -1.45, -1.0)  # x = 0.07, facing -x, z 1.0 to 1.45 (tangent -z)
+    twin = row((-1.0, 0.0), -0.07, -3.6, 0.0)  # x = 0.07 facing -x along the whole wall
+    params = WallParams()
+    assert _wall_cores([wall, patch], params).tolist() == [False, True]
+    assert _wall_cores([wall, twin], params).tolist() == [True, True]
 
 
 def _grazed_room(low_piece_in_line: bool) -> Mesh:

@@ -926,15 +926,20 @@ def _wall_cores(rows: list[dict], params: WallParams) -> np.ndarray:
     the wall's outer faces bound the rooms."""
     if len(rows) < 2:
         return np.zeros(len(rows), dtype=bool)
-    facing_back, d = _facing_back(rows)
-    return np.asarray((facing_back & (d >= CORE_MIN_M) & (d <= params.max_wall_thickness_m)).any(axis=1))
+    facing_back, d, overlap = _facing_back(rows)
+    # a core lies behind the face along most of the face itself: a short patch facing back a
+    # few centimetres in front of a long wall (a headset's second layer of the same surface,
+    # wound the other way) is the patch's core, not the wall's
+    length = _Rows.of(rows).length
+    core = facing_back & (d >= CORE_MIN_M) & (d <= params.max_wall_thickness_m) & (overlap >= CORE_OVERLAP_SHARE * length[:, None])
+    return np.asarray(core.any(axis=1))
 
 
-def _facing_back(rows: list[dict]) -> tuple[np.ndarray, FloatArray]:
+def _facing_back(rows: list[dict]) -> tuple[np.ndarray, FloatArray, FloatArray]:
     """``(n, n)`` which rows face back at each other's (parallel within
     :data:`PILASTER_PARALLEL_DEG`, facing the other way, running alongside each other over
-    :data:`CORE_OVERLAP_SHARE` of the shorter), and how far ``d[i, j]`` row ``j``'s plane lies in
-    front of row ``i``'s (m; negative behind)."""
+    :data:`CORE_OVERLAP_SHARE` of the shorter), how far ``d[i, j]`` row ``j``'s plane lies in
+    front of row ``i``'s (m; negative behind), and how long they run alongside (m)."""
     g = _Rows.of(rows)
     nor, off, lo, hi = g.normal, g.offset, g.lo, g.hi
     opposite = nor @ nor.T <= -np.cos(np.radians(PILASTER_PARALLEL_DEG))
@@ -943,7 +948,7 @@ def _facing_back(rows: list[dict]) -> tuple[np.ndarray, FloatArray]:
     d = -off[None, :] - off[:, None]
     overlap = np.minimum(hi[:, None], -lo[None, :]) - np.maximum(lo[:, None], -hi[None, :])
     shorter = np.minimum((hi - lo)[:, None], (hi - lo)[None, :])
-    return opposite & (overlap >= CORE_OVERLAP_SHARE * shorter), d
+    return opposite & (overlap >= CORE_OVERLAP_SHARE * shorter), d, overlap
 
 
 #: The outer face of a modelled wall looks at nothing scanned along at least this share of it
@@ -965,7 +970,7 @@ def _outer_faces(rows: list[dict], raster: StoryRaster, params: WallParams) -> n
     out = np.zeros(len(rows), dtype=bool)
     if len(rows) < 2:
         return out
-    facing_back, d = _facing_back(rows)
+    facing_back, d, _ = _facing_back(rows)
     twin = facing_back & (np.abs(d) <= CORE_MIN_M)
     if not twin.any():
         return out
