@@ -67,8 +67,9 @@ def test_no_stairs_in_furniture(preset, seed):
     assert find_stairs(s.truth_mesh(), _stories(s.truth)) == ()
 
 
-def _treads_mesh(rects: list[tuple[float, float, float, float, float]]) -> Mesh:
-    """Tread tops ``(x0, x1, z0, z1, y)``, each a grid of small up-facing triangles."""
+def _treads_mesh(rects: list[tuple[float, float, float, float, float]], down: int = 0) -> Mesh:
+    """Tread tops ``(x0, x1, z0, z1, y)``, each a grid of small up-facing triangles (the last
+    ``down`` of them wound the other way: facing down)."""
     verts, faces = [], []
     for x0, x1, z0, z1, y in rects:
         u, v = np.meshgrid(np.linspace(x0, x1, 6), np.linspace(z0, z1, 6), indexing="ij")
@@ -77,8 +78,8 @@ def _treads_mesh(rects: list[tuple[float, float, float, float, float]]) -> Mesh:
         i, j = np.meshgrid(np.arange(5), np.arange(5), indexing="ij")
         k = (i * 6 + j).ravel() + base
         # counter-clockwise seen from +y: normals up
-        faces.append(np.c_[k, k + 1, k + 7])
-        faces.append(np.c_[k, k + 7, k + 6])
+        tri = np.r_[np.c_[k, k + 1, k + 7], np.c_[k, k + 7, k + 6]]
+        faces.append(tri[:, ::-1] if len(faces) >= len(rects) - down else tri)
     return Mesh(np.vstack(verts), np.vstack(faces))
 
 
@@ -104,6 +105,23 @@ def test_straight_and_l_stairs():
     assert [t.landing for t in s.treads].count(True) == 1
     # the L's empty quarter is not in its footprint
     assert not s.footprint.contains(Polygon([(0.3, 1.2), (1.5, 1.2), (1.5, 2.0), (0.3, 2.0)]).centroid)
+
+
+def test_a_u_stair_whose_upper_flight_was_turned_over_is_found_whole():
+    """hl2_su_apartment's stair: the winding repair turns each connected piece of the mesh by
+    its floors and ceilings, and the piece holding the upper flight (treads passing the lower
+    story's ceiling height, which vote as a ceiling seen from the wrong side) was turned over.
+    Found on up-facing faces alone, the stair stopped halfway (7 of 14 treads, low confidence,
+    straight); its treads are treads whichever way they face."""
+    rise, going, width = 0.18, 0.27, 0.9
+    first = [(k * going, (k + 1) * going, 0.0, width, (k + 1) * rise) for k in range(7)]
+    landing = [(7 * going, 7 * going + width, 0.0, 2 * width, 8 * rise)]
+    second = [((6 - k) * going, (7 - k) * going, width, 2 * width, (9 + k) * rise) for k in range(6)]
+    (s,) = find_stairs(_treads_mesh(first + landing + second, down=len(second)), STORIES)
+    assert (s.shape, s.story, s.to_story, s.risers, len(s.treads)) == ("U", 0, 1, 15, 14)
+    assert s.confidence == "high"
+    # the upper flight alone, the lower one missing: no stair from one floor is made up
+    assert find_stairs(_treads_mesh(second, down=len(second)), STORIES) == ()
 
 
 def test_irregular_tops_are_not_stairs():
@@ -162,6 +180,9 @@ def test_real_two_story_apartment_stair():
     s = max(result.stairs, key=lambda x: len(x.treads))
     assert (s.story, s.to_story) == (0, 1)
     assert len(s.treads) >= 5 and RISE_M[0] <= s.rise <= RISE_M[1]
+    # a U (a dogleg): 10 risers to a landing at 1.85 m, one to the second landing, four to the
+    # upper floor; its upper flight's piece of mesh turned over by the winding repair
+    assert (s.shape, len(s.treads), s.confidence) == ("U", 14, "high")
     story = result.orientation.stories
     assert s.risers == round((story[1].floor - story[0].floor) / s.rise)
 

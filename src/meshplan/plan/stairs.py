@@ -243,10 +243,12 @@ def _face_samples(tri: np.ndarray, cell: float) -> tuple[np.ndarray, np.ndarray]
     return pts.reshape(-1, 3), face
 
 
-def _patches(mesh: Mesh, lo: float, hi: float) -> list[Tread]:
-    """The horizontal patches of up-facing faces with centroids between ``lo`` and ``hi``."""
+def _patches(mesh: Mesh, lo: float, hi: float, either_way: bool = False) -> list[Tread]:
+    """The horizontal patches of up-facing faces (of horizontal faces facing either way, with
+    ``either_way``) with centroids between ``lo`` and ``hi``."""
     c = mesh.face_centroids
-    sel = np.flatnonzero((mesh.face_normals[:, 1] > UP_NORMAL) & (c[:, 1] > lo) & (c[:, 1] < hi))
+    ny = mesh.face_normals[:, 1]
+    sel = np.flatnonzero(((np.abs(ny) if either_way else ny) > UP_NORMAL) & (c[:, 1] > lo) & (c[:, 1] < hi))
     if len(sel) == 0:
         return []
     tri = mesh.vertices[mesh.faces[sel]]
@@ -452,6 +454,7 @@ def find_stairs(mesh: Mesh, stories: tuple[Story, ...], cut_height_m: float = 1.
         above = stories[s + 1] if s + 1 < len(stories) else None
         top = above.floor if above is not None else story.ceiling
         patches = _patches(mesh, story.floor + RISE_M[0] / 2, top - RISE_M[0] / 2)
+        either: list[Tread] | None = None  # the same with down-facing faces, when a stair needs them
         while len(patches) >= MIN_FLIGHT_TREADS:
             order = np.argsort([t.height for t in patches], kind="stable")
             patches = [patches[i] for i in order]
@@ -467,6 +470,14 @@ def find_stairs(mesh: Mesh, stories: tuple[Story, ...], cut_height_m: float = 1.
             chain = best[1]
             st = _stair([patches[i] for i in chain], story, above, story.floor + cut_height_m)
             used = set(chain)
+            if st is not None and above is not None and st.confidence == "low":
+                if either is None:
+                    either = _patches(mesh, story.floor + RISE_M[0] / 2, top - RISE_M[0] / 2, either_way=True)
+                longer = _completed(st, either, story, above, story.floor + cut_height_m)
+                if longer is not None:
+                    st = longer
+                    taken = unary_union([t.polygon for t in st.treads])
+                    used |= {i for i, t in enumerate(patches) if t.polygon.intersection(taken).area > STACKED_SHARE * t.polygon.area}
             patches = [t for i, t in enumerate(patches) if i not in used]
             if st is None:
                 continue
@@ -475,6 +486,44 @@ def find_stairs(mesh: Mesh, stories: tuple[Story, ...], cut_height_m: float = 1.
                 st = replace(st, void=void, void_source=source)
             out.append(st)
     return tuple(out)
+
+
+#: A stair found from one floor only is completed from horizontal patches of either winding
+#: within this distance (m) of its footprint: a U stair's other flight lies beside it.
+COMPLETE_REACH_M = 1.5
+
+
+def _completed(st: StairElement, either: list[Tread], story: Story, above: Story, cut_height: float) -> StairElement | None:
+    """``st`` completed to both floors from horizontal patches facing either way, or ``None``.
+
+    The winding repair (:func:`meshplan.orient.facing.inward_flips`) turns each connected piece
+    of the mesh by the floors and ceilings in it; a piece that holds a stair's upper flight,
+    whose treads pass the lower story's ceiling height, can be turned over with it, so that its
+    treads face down and the stair seems to end halfway. A tread is a tread whichever way it was
+    wound: the stair is looked for again near it among the horizontal patches of either winding,
+    and taken only where it then reaches both floors with more treads, including the ones found.
+    """
+    near = st.footprint.buffer(COMPLETE_REACH_M)
+    cand = [t for t in either if t.polygon.intersects(near)]
+    if len(cand) <= len(st.treads):
+        return None
+    cand.sort(key=lambda t: t.height)
+    h = np.array([t.height for t in cand])
+    adj = _adjacency(cand)
+    best: list[int] = []
+    for rise in np.arange(st.rise - RISE_TOL_M, st.rise + RISE_TOL_M + 1e-9, 0.005):
+        chain = _longest_chain(h, adj, float(rise))
+        if len(chain) > len(best):
+            best = chain
+    if len(best) <= len(st.treads):
+        return None
+    found = unary_union([t.polygon for t in st.treads])
+    treads = [cand[i] for i in best]
+    kept = sum(t.polygon.intersection(found).area for t in treads)
+    if kept < (1.0 - STACKED_SHARE) * found.area:  # another stack of patches, not this stair
+        return None
+    longer = _stair(treads, story, above, cut_height)
+    return longer if longer is not None and longer.confidence != "low" else None
 
 
 #: The void is the part of the footprint (grown by this, m) the upper floor was not scanned over ...
