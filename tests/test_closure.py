@@ -85,3 +85,23 @@ def test_two_pieces_of_a_face_are_joined_along_the_walls_other_face():
     assert len(bridges) == 1 and abs(bridges[0].length - 2.0) < 0.01
     _, _, bridges = _close(_walls(*pieces))
     assert not bridges
+
+
+def test_a_wall_end_a_little_past_its_corner_stops_there():
+    """hl2_su_apartment's alcove: the living room's west wall x = 3.68 (z 0 to 1.07) turns the
+    corner into the alcove's back wall z = 1.05 (x 1.6 to 3.55, its end 13 cm short of the
+    corner), passing that wall's line by 2 cm. Taken for a free end, it ran on 1.46 m across
+    the alcove's mouth to the wall z = 2.53 and cut the alcove off as a 2.6 m2 "closet" (the
+    living room 7.6 % short). An end past a turned wall's line by the scan's noise meets it
+    there and is trimmed back to it."""
+    alcove = [
+        ((1.6, 1.05), (3.55, 1.05), (0.0, 1.0)),  # the alcove's back wall, facing south
+        ((1.6, 2.53), (8.0, 2.53), (0.0, -1.0)),  # the wall across the far side, facing north
+    ]
+    walls = _walls(((3.68, 0.0), (3.68, 1.07), (1.0, 0.0)), *alcove)  # faces the living room
+    u_lo, u_hi, _ = _close(walls)
+    assert np.allclose(_z_ends(walls, 0, u_lo, u_hi), [0.0, 1.05], atol=0.01)
+    # an end short of that line still runs on to it (a corner rounded off), and no further
+    walls = _walls(((3.68, 0.0), (3.68, 0.9), (1.0, 0.0)), *alcove)
+    u_lo, u_hi, _ = _close(walls)
+    assert np.allclose(_z_ends(walls, 0, u_lo, u_hi), [0.0, 1.05], atol=0.01)

@@ -44,6 +44,10 @@ MIN_MEETING_ANGLE_DEG = 20.0
 #: and are noded despite rounding (polygonize drops the 1 mm dangles).
 NODE_OVERSHOOT_M = 1e-3
 
+#: A wall end past the line of a turned wall by at most this (m) meets it there (the two faces'
+#: ends overlap at a corner by the scan's noise, 2-3 cm each) and is trimmed back to it.
+CORNER_OVERSHOOT_M = 0.05
+
 #: A wall end closer than this (m) to another wall line meets it (a corner, a T junction);
 #: farther, it is free: a partition ending in the room or short of the edge of the scan.
 FREE_END_M = 0.02
@@ -138,7 +142,10 @@ def close_walls(walls: FlatWalls, index: np.ndarray, corner_m: float, gap_m: flo
         # beyond that end would lie past the face, inside or behind the wall it meets
         reached = np.where(ub < lo[None, :], met_lo[None, :], np.where(ub > hi[None, :], met_hi[None, :], False))
         outside = np.where(reached & (outside > FREE_END_M), np.inf, outside)
-        meets = (np.abs(denom) >= np.sin(np.radians(MIN_MEETING_ANGLE_DEG))) & (s >= -1e-9)
+        # a line the end has passed by the scan's noise is met too (CORNER_OVERSHOOT_M): the end
+        # is trimmed back to it, and does not run on across the room to the next line (an
+        # alcove's side wall, 2 cm past the alcove's back wall, drawn across the alcove's mouth)
+        meets = (np.abs(denom) >= np.sin(np.radians(MIN_MEETING_ANGLE_DEG))) & (s >= -CORNER_OVERSHOOT_M)
         crossing = meets & (s <= gap_m)
         # beyond gap_m: along the other face of the wall, and short of the next piece of its line
         backed[sign] = back_reach(tan, nor, off, lo, hi, sign, corner_m)
@@ -153,7 +160,7 @@ def close_walls(walls: FlatWalls, index: np.ndarray, corner_m: float, gap_m: flo
         np.fill_diagonal(ok, False)
         np.fill_diagonal(leg, False)
         cand = np.where(ok | leg, s, np.inf)
-        t = np.argmin(cand, axis=1)
+        t = np.argmin(np.abs(cand), axis=1)  # the nearest line, passed or ahead
         rows = np.arange(n)
         best[sign] = np.where(np.isfinite(cand[rows, t]), cand[rows, t], np.inf)
         target[sign] = np.where(np.isfinite(best[sign]), t, -1)
