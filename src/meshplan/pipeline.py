@@ -24,6 +24,7 @@ from .plan.openings import door_leaves
 from .plan.parametric import apply_parametric
 from .plan.stairs import attach_rooms
 from .plan.symbols import plan_symbols
+from .plan.voids import double_height_voids
 from .result import PAPER_FACES, PAPER_TIMINGS_S, STAGES, Oriented, Progress, Result, StoryPlans, _read_only, _Timer
 from .slicing import slice_mesh
 from .updown import WEAK_SIGN_EVIDENCE, settle_up
@@ -227,6 +228,8 @@ def _compute(
         stairs = find_stairs(plan_mesh, orientation.stories, options.plan.drafting_height_m, options.orient.slab_tolerance_m)
         rooms = type_rooms(rooms, elements, openings.kind, stairs)
         stairs = attach_rooms(stairs, rooms)
+        # the holes in the upper floors over spaces two stories high (a stair's is its own)
+        voids = double_height_voids(plan_mesh, orientation, stairs, options.orient.slab_tolerance_m)
     with timer.stage("slice_draw"):
         plans = []
         heights, normal_y = plan_mesh.face_centroids[:, 1], plan_mesh.face_normals[:, 1]
@@ -240,7 +243,7 @@ def _compute(
                     pen_and_ink=pen,
                     drafting=cut,
                     annotations=story_ann,
-                    symbols=plan_symbols(story.index, walls, openings, rooms, physical, options.render.imperial, stairs=stairs, elements=elements),
+                    symbols=plan_symbols(story.index, walls, openings, rooms, physical, options.render.imperial, stairs=stairs, elements=elements, voids=voids),
                     reference=_read_only(slice_mesh(plan_mesh.triangles[story_faces], np.array([cut.height])).segments),
                     model_faces=_read_only(np.flatnonzero(in_story & without_ceiling(heights, normal_y, story, options.orient.slab_tolerance_m))),
                 )
@@ -265,4 +268,5 @@ def _compute(
         annotation_story=oriented.annotation_story,
         opening_elements=elements,
         stairs=stairs,
+        voids=voids,
     )

@@ -26,6 +26,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from .plan.elements import OpeningElement
     from .plan.stairs import StairElement
     from .plan.symbols import PlanSymbols
+    from .plan.voids import Void
     from .walls import FlatWalls, PhysicalWall
 
 #: The stage timings are logged on the package's logger ("DEBUG meshplan: stage orient: ..."
@@ -138,6 +139,9 @@ class Result:
     stairs
         The stairs found in the stepped horizontal surfaces, with the stories and rooms they
         connect and the void over each in the upper floor (:class:`meshplan.plan.stairs.StairElement`).
+    voids
+        The holes in the upper floors over double-height spaces (:class:`meshplan.plan.voids.Void`;
+        a stair's own is its ``void``).
     """
 
     input: LoadStats
@@ -157,6 +161,7 @@ class Result:
     annotation_story: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
     opening_elements: tuple[OpeningElement, ...] = ()
     stairs: tuple[StairElement, ...] = ()
+    voids: tuple[Void, ...] = ()
 
     def __post_init__(self) -> None:
         # a copy of each: the timer and the caller keep theirs

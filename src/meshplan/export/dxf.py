@@ -25,6 +25,7 @@ LAYERS = {
     "WINDOWS": 5,  # blue
     "LOW_CONFIDENCE": 1,  # red, dashed: rooms meshplan is unsure of (closed by the floor)
     "STAIRS": 4,  # cyan: treads, walking line and arrow, the cut, the void over a stair
+    "VOIDS": 4,  # cyan: the holes in the floor over double-height spaces, dash-dotted and crossed
 }
 
 #: Block names of the door and window symbols, inserted once per opening.
@@ -118,6 +119,10 @@ def drafting_dxf(
             for seg in symbols.windows:
                 msp.add_line(_p(seg[0]), _p(seg[1]), dxfattribs={"layer": "WINDOWS"})
         _stairs(msp, getattr(symbols, "stairs", ()))
+        for ring in getattr(symbols, "voids", ()):
+            msp.add_lwpolyline([_p(q) for q in ring[:-1]], close=True, dxfattribs={"layer": "VOIDS", "linetype": "DASHDOT", "ltscale": VOID_DASH_LTSCALE})
+        for seg in getattr(symbols, "void_crosses", ()):
+            msp.add_line(_p(seg[0]), _p(seg[1]), dxfattribs={"layer": "VOIDS"})
         for d in symbols.dimensions:
             p1, p2 = np.asarray(_p(d.p1)), np.asarray(_p(d.p2))
             # "left of p1 -> p2" in the plan is right of it in the mirrored drawing

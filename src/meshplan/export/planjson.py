@@ -134,7 +134,8 @@ def _input_extras(result: Result) -> dict[str, Any]:
 
 
 def _voids(result: Result) -> list[dict[str, Any]]:
-    """The holes in the floors: over each stair, in the floor of the story it arrives at."""
+    """The holes in the floors: over each stair, in the floor of the story it arrives at, and
+    over each double-height space (:class:`meshplan.plan.voids.Void`)."""
     out = []
     for k, s in enumerate(result.stairs):
         if s.void is None or s.to_story is None:
@@ -143,6 +144,9 @@ def _voids(result: Result) -> list[dict[str, Any]]:
         out.append(
             {"story": s.to_story, "kind": "stair", "stair": k, "polygon": _r(xy), "area": round(float(s.void.area), _NC), "source": s.void_source}
         )
+    for v in result.voids:
+        xy = np.asarray(v.polygon.exterior.coords)[:-1]
+        out.append({"story": v.story, "kind": v.kind, "polygon": _r(xy), "area": round(float(v.polygon.area), _NC), "source": v.source})
     return out
 
 

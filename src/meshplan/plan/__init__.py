@@ -14,6 +14,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from .peninink import PenAndInkPlan, pen_and_ink
     from .rooms import Room, find_rooms
     from .stairs import StairElement, find_stairs
+    from .voids import Void, double_height_voids
 
 #: Where each public name lives (loaded when first used, :mod:`meshplan._lazy`).
 _EXPORTS = {
@@ -23,10 +24,12 @@ _EXPORTS = {
     "PlanParams": "params",
     "Room": "rooms",
     "StairElement": "stairs",
+    "Void": "voids",
     "drafting": "draft",
     "find_openings": "openings",
     "find_rooms": "rooms",
     "find_stairs": "stairs",
+    "double_height_voids": "voids",
     "pen_and_ink": "peninink",
 }
 
@@ -37,6 +40,8 @@ __all__ = [
     "PlanParams",
     "Room",
     "StairElement",
+    "Void",
+    "double_height_voids",
     "drafting",
     "find_openings",
     "find_rooms",

@@ -33,6 +33,7 @@ from .rooms import Room
 
 if TYPE_CHECKING:  # pragma: no cover
     from .stairs import StairElement
+    from .voids import Void
 
 
 @dataclass(frozen=True)
@@ -176,6 +177,10 @@ class PlanSymbols:
     openings: tuple[OpeningSymbol, ...] = ()
     #: the stairs starting or arriving on the story (:class:`StairSymbol`)
     stairs: tuple[StairSymbol, ...] = ()
+    #: the holes in the story's floor over double-height spaces: closed rings [x, z] ...
+    voids: tuple[FloatArray, ...] = ()
+    #: ... and their crosses (``(S, 2, 2)``, :func:`void_cross`)
+    void_crosses: FloatArray = field(default_factory=lambda: np.zeros((0, 2, 2)))
 
 
 def format_length(m: float, imperial: bool) -> str:
@@ -257,12 +262,14 @@ def plan_symbols(
     dimension_offset_m: float = 0.3,
     stairs: tuple[StairElement, ...] = (),
     elements: tuple[OpeningElement, ...] = (),
+    voids: tuple[Void, ...] = (),
 ) -> PlanSymbols:
     """The symbols of one story's drafting plan; door jambs and window sashes span the
     thickness of the ``physical`` wall carrying each opening. ``stairs`` (``Result.stairs``)
     are drawn on the stories they start on and arrive at (:func:`stair_symbols`); a door whose
     element (``elements``, one per row of ``openings``) has a swing is drawn from its hinge
-    into the room it opens into (:func:`door_frame`)."""
+    into the room it opens into (:func:`door_frame`). ``voids`` (``Result.voids``) are outlined and
+    crossed on the story whose floor they open."""
     carrier = wall_of_face(physical, len(walls))
     leaves, arcs, jambs, windows = [], [], [], []
     records: list[OpeningSymbol] = []
@@ -359,7 +366,15 @@ def plan_symbols(
         room_dimensions(mine_rooms),
         tuple(records),
         stair_symbols(story, stairs, imperial),
+        *_void_symbols(story, voids),
     )
+
+
+def _void_symbols(story: int, voids: tuple[Void, ...]) -> tuple[tuple[FloatArray, ...], FloatArray]:
+    """The rings of the story's double-height voids and their crosses."""
+    rings = tuple(np.asarray(v.polygon.exterior.coords, dtype=np.float64) for v in voids if v.story == story)
+    crosses = [void_cross(r) for r in rings]
+    return rings, (np.concatenate(crosses) if crosses else np.zeros((0, 2, 2)))
 
 
 # --- stairs ------------------------------------------------------------------------------------

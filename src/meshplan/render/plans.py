@@ -170,6 +170,9 @@ def drafting_figure(
         # room labels may sit over a stair's treads (on their halo), nothing else may
         stair_lines, handles = _draw_stairs(ax, symbols, sheet)
         legend += handles
+        void_lines, handles = _draw_voids(ax, symbols)
+        lines += void_lines
+        legend += handles
     lines += annotation_obstacles(annotations.positions, annotations.directions)
     placer = None
     if symbols is not None:
@@ -393,6 +396,23 @@ def _draw_stairs(ax, symbols: PlanSymbols, sheet: Sheet) -> tuple[list, list]:
     if voids:
         legend.append((Line2D([], [], color=STAIR_COLOR, lw=0.7, ls=VOID_DASH), "void in the floor (over a stair)"))
     return out, legend
+
+
+def _draw_voids(ax, symbols: PlanSymbols) -> tuple[list, list]:
+    """The holes in the floor over double-height spaces, outlined dash-dotted and crossed as a
+    stair's void is. Returns their lines (for texts to avoid) and the legend entry."""
+    import shapely
+    from matplotlib.collections import LineCollection
+    from matplotlib.lines import Line2D
+
+    if not symbols.voids:
+        return [], []
+    kw: dict[str, Any] = dict(colors=STAIR_COLOR, zorder=2.8)
+    ax.add_collection(LineCollection(list(symbols.voids), linewidths=0.7, linestyles=VOID_DASH, **kw))
+    if len(symbols.void_crosses):
+        ax.add_collection(LineCollection(list(symbols.void_crosses), linewidths=0.25, **kw))
+    lines = [shapely.LineString(r) for r in symbols.voids] + [shapely.LineString(s) for s in symbols.void_crosses]
+    return lines, [(Line2D([], [], color=STAIR_COLOR, lw=0.7, ls=VOID_DASH), "void in the floor (double-height space)")]
 
 
 def _place_stair_texts(ax, symbols: PlanSymbols, placer: Placer) -> None:
