@@ -18,7 +18,7 @@ from meshplan.evaluate import evaluate, format_report
 from meshplan.export.planjson import plan_document, plan_schema
 from meshplan.geometry import Mesh
 from meshplan.orient.stories import Story
-from meshplan.plan.stairs import RISE_M, find_stairs
+from meshplan.plan.stairs import RISE_M, find_stairs, turned_pieces
 from meshplan.synthetic import generate
 from meshplan.synthetic.truth import stair_footprint
 
@@ -117,9 +117,16 @@ def test_a_u_stair_whose_upper_flight_was_turned_over_is_found_whole():
     first = [(k * going, (k + 1) * going, 0.0, width, (k + 1) * rise) for k in range(7)]
     landing = [(7 * going, 7 * going + width, 0.0, 2 * width, 8 * rise)]
     second = [((6 - k) * going, (7 - k) * going, width, 2 * width, (9 + k) * rise) for k in range(6)]
-    (s,) = find_stairs(_treads_mesh(first + landing + second, down=len(second)), STORIES)
+    mesh = _treads_mesh(first + landing + second, down=len(second))
+    (s,) = find_stairs(mesh, STORIES)
     assert (s.shape, s.story, s.to_story, s.risers, len(s.treads)) == ("U", 0, 1, 15, 14)
     assert s.confidence == "high"
+    # the upper flight's faces (6 treads of 50 triangles), and they alone, are turned back
+    # for the models; each tread is a piece of its own here
+    assert len(s.turned) == 6 * 50 and np.all(mesh.face_normals[s.turned, 1] < 0)
+    turned = turned_pieces(mesh, (s,))
+    assert np.array_equal(np.flatnonzero(turned), np.sort(s.turned))
+    assert np.all(mesh.with_flipped(turned).face_normals[:, 1] > 0)
     # the upper flight alone, the lower one missing: no stair from one floor is made up
     assert find_stairs(_treads_mesh(second, down=len(second)), STORIES) == ()
 
@@ -183,6 +190,10 @@ def test_real_two_story_apartment_stair():
     # a U (a dogleg): 10 risers to a landing at 1.85 m, one to the second landing, four to the
     # upper floor; its upper flight's piece of mesh turned over by the winding repair
     assert (s.shape, len(s.treads), s.confidence) == ("U", 14, "high")
+    # and the piece of mesh holding its upper flight turned back: the treads face up in the
+    # models (193 of its 311 tread faces faced down)
+    faces = np.concatenate([t.faces for t in s.treads])
+    assert np.mean(result.mesh.face_normals[faces, 1] > 0) > 0.95
     story = result.orientation.stories
     assert s.risers == round((story[1].floor - story[0].floor) / s.rise)
 

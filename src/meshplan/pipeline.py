@@ -22,7 +22,7 @@ from .plan import drafting, find_openings, find_rooms, find_stairs, pen_and_ink
 from .plan.elements import ModelName, RoomEdit, mark_low_confidence, name_rooms, opening_elements, reveal_thickness, section_names, type_rooms, wall_elements
 from .plan.openings import door_leaves
 from .plan.parametric import apply_parametric
-from .plan.stairs import attach_rooms
+from .plan.stairs import attach_rooms, turned_pieces
 from .plan.symbols import plan_symbols
 from .plan.voids import double_height_voids
 from .result import PAPER_FACES, PAPER_TIMINGS_S, STAGES, Oriented, Progress, Result, StoryPlans, _read_only, _Timer
@@ -228,6 +228,11 @@ def _compute(
         stairs = find_stairs(plan_mesh, orientation.stories, options.plan.drafting_height_m, options.orient.slab_tolerance_m)
         rooms = type_rooms(rooms, elements, openings.kind, stairs)
         stairs = attach_rooms(stairs, rooms)
+        # the pieces of the mesh the winding repair turned over with a stair's upper flight,
+        # turned back (for the models: everything that reads the winding has run)
+        turned = turned_pieces(plan_mesh, stairs)
+        if turned.any():
+            plan_mesh = plan_mesh.with_flipped(turned)
         # the holes in the upper floors over spaces two stories high (a stair's is its own)
         voids = double_height_voids(plan_mesh, orientation, stairs, options.orient.slab_tolerance_m)
     with timer.stage("slice_draw"):

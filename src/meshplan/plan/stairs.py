@@ -26,7 +26,7 @@ footprint and the void above are one detector whose steps share the tread arrays
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -41,7 +41,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from ..orient import Story
     from .rooms import Room
 
-__all__ = ["Flight", "StairElement", "Tread", "attach_rooms", "find_stairs", "stair_void"]
+__all__ = ["Flight", "StairElement", "Tread", "attach_rooms", "find_stairs", "stair_void", "turned_pieces"]
 
 #: Rise (m) of a step: building codes allow 0.14-0.22 m (Germany's DIN 18065 0.14-0.20 m, the
 #: UK's Part K at most 0.22 m, the US IRC at most 7 3/4 in = 0.197 m, commercial stairs at least
@@ -96,6 +96,8 @@ class Tread:
     height: float
     area: float
     landing: bool = False
+    #: the mesh's faces in it (not in plan.json)
+    faces: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64), repr=False)
 
     def to_dict(self, nd: int = 4) -> dict[str, Any]:
         return {
@@ -182,6 +184,9 @@ class StairElement:
     room_above: int | None = None
     confidence: str = "low"
     confidence_reason: str = ""
+    #: the faces of its treads that face down: pieces of the mesh the winding repair turned
+    #: over (:func:`_completed`, :func:`turned_pieces`; not in plan.json)
+    turned: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64), repr=False)
 
     @property
     def width(self) -> float:
@@ -283,10 +288,14 @@ def _patches(mesh: Mesh, lo: float, hi: float, either_way: bool = False) -> list
     vidx = np.repeat(remap[lab[fmask]], 3)
     order = np.argsort(vidx, kind="stable")
     hulls = shapely.convex_hull(shapely.multipoints(vx[order], indices=vidx[order]))
+    # and each patch's faces, grouped the same way
+    patch_of_face = remap[lab[fmask]]
+    by_patch = np.argsort(patch_of_face, kind="stable")
+    faces = np.split(sel[fmask][by_patch], np.cumsum(np.bincount(patch_of_face, minlength=len(keep)))[:-1])
     out = []
-    for k, g in zip(keep, hulls):
+    for k, g, f in zip(keep, hulls, faces, strict=True):
         if isinstance(g, Polygon) and g.area > 0:
-            out.append(Tread(g, float(ymean[k]), float(wsum[k])))
+            out.append(Tread(g, float(ymean[k]), float(wsum[k]), faces=f))
     return out
 
 
@@ -400,7 +409,7 @@ def _stair(chain: list[Tread], story: Story, above: Story | None, cut_height: fl
         risers = int(round((top - bottom) / fit))
         rise = fit
     in_run = {i for r in runs for i in r}
-    treads = tuple(Tread(t.polygon, t.height, t.area, landing=i not in in_run) for i, t in enumerate(chain))
+    treads = tuple(replace(t, landing=i not in in_run) for i, t in enumerate(chain))
     flights = []
     dirs = []
     # each tread's number of rises above the bottom, the flights' risers between what they join
@@ -475,7 +484,8 @@ def find_stairs(mesh: Mesh, stories: tuple[Story, ...], cut_height_m: float = 1.
                     either = _patches(mesh, story.floor + RISE_M[0] / 2, top - RISE_M[0] / 2, either_way=True)
                 longer = _completed(st, either, story, above, story.floor + cut_height_m)
                 if longer is not None:
-                    st = longer
+                    faces = np.concatenate([t.faces for t in longer.treads])
+                    st = replace(longer, turned=faces[mesh.face_normals[faces, 1] < 0])
                     taken = unary_union([t.polygon for t in st.treads])
                     used |= {i for i, t in enumerate(patches) if t.polygon.intersection(taken).area > STACKED_SHARE * t.polygon.area}
             patches = [t for i, t in enumerate(patches) if i not in used]
@@ -524,6 +534,26 @@ def _completed(st: StairElement, either: list[Tread], story: Story, above: Story
         return None
     longer = _stair(treads, story, above, cut_height)
     return longer if longer is not None and longer.confidence != "low" else None
+
+
+def turned_pieces(mesh: Mesh, stairs: tuple[StairElement, ...]) -> np.ndarray:
+    """``(F,)`` the faces of the pieces of ``mesh`` (connected components) that hold more of a
+    stair's treads facing down (``StairElement.turned``) than facing up, by area: pieces the
+    winding repair turned over (their treads voted as a ceiling seen from the wrong side,
+    :func:`_completed`). Turned back, the upper flight and the walls that came with it face
+    into the rooms again, as the 3D models show them."""
+    out = np.zeros(mesh.n_faces, dtype=bool)
+    turned = [s.turned for s in stairs if len(s.turned)]
+    if not turned:
+        return out
+    comp = mesh.face_roots
+    down = np.concatenate(turned)
+    up = np.concatenate([t.faces for s in stairs if len(s.turned) for t in s.treads])
+    up = up[mesh.face_normals[up, 1] > 0]
+    areas = mesh.face_areas
+    n = int(comp.max()) + 1
+    balance = np.bincount(comp[down], weights=areas[down], minlength=n) - np.bincount(comp[up], weights=areas[up], minlength=n)
+    return balance[comp] > 0
 
 
 #: The void is the part of the footprint (grown by this, m) the upper floor was not scanned over ...
