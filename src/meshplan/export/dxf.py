@@ -120,7 +120,7 @@ def drafting_dxf(
                 msp.add_line(_p(seg[0]), _p(seg[1]), dxfattribs={"layer": "WINDOWS"})
         _stairs(msp, getattr(symbols, "stairs", ()))
         for ring in getattr(symbols, "voids", ()):
-            msp.add_lwpolyline([_p(q) for q in ring[:-1]], close=True, dxfattribs={"layer": "VOIDS", "linetype": "DASHDOT", "ltscale": VOID_DASH_LTSCALE})
+            _void(msp, ring, "VOIDS")
         for seg in getattr(symbols, "void_crosses", ()):
             msp.add_line(_p(seg[0]), _p(seg[1]), dxfattribs={"layer": "VOIDS"})
         for d in symbols.dimensions:
@@ -217,6 +217,11 @@ def _insert_opening(msp, rec) -> None:
         attrib.set_placement(at, align=TextEntityAlignment.MIDDLE_CENTER)
 
 
+def _void(msp, ring, layer: str) -> None:
+    """The outline of a hole in the floor (a closed ring), dash-dotted (DASHDOT) on ``layer``."""
+    msp.add_lwpolyline([_p(q) for q in ring[:-1]], close=True, dxfattribs={"layer": layer, "linetype": "DASHDOT", "ltscale": VOID_DASH_LTSCALE})
+
+
 def _stairs(msp, stairs) -> None:
     """The stair symbols (:class:`meshplan.plan.symbols.StairSymbol`) on STAIRS: treads and
     stringers, the part above the cut DASHED, the break line, the walking line with a filled
@@ -237,8 +242,7 @@ def _stairs(msp, stairs) -> None:
         if len(st.walk_hidden) >= 2:
             msp.add_lwpolyline([_p(q) for q in st.walk_hidden], dxfattribs={"layer": "STAIRS", "linetype": "DASHED", "ltscale": STAIR_DASH_LTSCALE})
         if len(st.void) >= 4:
-            void = [_p(q) for q in st.void[:-1]]
-            msp.add_lwpolyline(void, close=True, dxfattribs={"layer": "STAIRS", "linetype": "DASHDOT", "ltscale": VOID_DASH_LTSCALE})
+            _void(msp, st.void, "STAIRS")
         ends = [w for w in (st.walk_hidden, st.walk) if len(w) >= 2]
         if ends:
             tip, d = np.asarray(ends[0][-1]), np.asarray(st.arrow)

@@ -184,9 +184,6 @@ class StairElement:
     room_above: int | None = None
     confidence: str = "low"
     confidence_reason: str = ""
-    #: the faces of its treads that face down: pieces of the mesh the winding repair turned
-    #: over (:func:`_completed`, :func:`turned_pieces`; not in plan.json)
-    turned: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64), repr=False)
 
     @property
     def width(self) -> float:
@@ -336,6 +333,21 @@ def _longest_chain(h: np.ndarray, adj: np.ndarray, rise: float) -> list[int]:
     return chain[::-1]
 
 
+#: The rises tried when chaining treads lie this far apart (m).
+RISE_STEP_M = 0.005
+
+
+def _best_chain(h: np.ndarray, adj: np.ndarray, lowest: float, highest: float) -> list[int]:
+    """The longest chain of :func:`_longest_chain` over the rises from ``lowest`` to ``highest``
+    (m, :data:`RISE_STEP_M` apart; of equally long chains, the one of the lowest rise)."""
+    best: list[int] = []
+    for rise in np.arange(lowest, highest + 1e-9, RISE_STEP_M):
+        chain = _longest_chain(h, adj, float(rise))
+        if len(chain) > len(best):
+            best = chain
+    return best
+
+
 def _flights(cen: np.ndarray) -> list[list[int]]:
     """Runs of consecutive treads (indices into ``cen``) advancing by a regular going along one
     direction."""
@@ -468,15 +480,9 @@ def find_stairs(mesh: Mesh, stories: tuple[Story, ...], cut_height_m: float = 1.
             order = np.argsort([t.height for t in patches], kind="stable")
             patches = [patches[i] for i in order]
             h = np.array([t.height for t in patches])
-            adj = _adjacency(patches)
-            best: tuple[int, list[int]] | None = None
-            for rise in np.arange(RISE_M[0], RISE_M[1] + 1e-9, 0.005):
-                chain = _longest_chain(h, adj, float(rise))
-                if best is None or len(chain) > len(best[1]):
-                    best = (len(chain), chain)
-            if best is None or len(best[1]) < MIN_FLIGHT_TREADS:
+            chain = _best_chain(h, _adjacency(patches), *RISE_M)
+            if len(chain) < MIN_FLIGHT_TREADS:
                 break
-            chain = best[1]
             st = _stair([patches[i] for i in chain], story, above, story.floor + cut_height_m)
             used = set(chain)
             if st is not None and above is not None and st.confidence == "low":
@@ -484,8 +490,7 @@ def find_stairs(mesh: Mesh, stories: tuple[Story, ...], cut_height_m: float = 1.
                     either = _patches(mesh, story.floor + RISE_M[0] / 2, top - RISE_M[0] / 2, either_way=True)
                 longer = _completed(st, either, story, above, story.floor + cut_height_m)
                 if longer is not None:
-                    faces = np.concatenate([t.faces for t in longer.treads])
-                    st = replace(longer, turned=faces[mesh.face_normals[faces, 1] < 0])
+                    st = longer
                     taken = unary_union([t.polygon for t in st.treads])
                     used |= {i for i, t in enumerate(patches) if t.polygon.intersection(taken).area > STACKED_SHARE * t.polygon.area}
             patches = [t for i, t in enumerate(patches) if i not in used]
@@ -518,13 +523,7 @@ def _completed(st: StairElement, either: list[Tread], story: Story, above: Story
     if len(cand) <= len(st.treads):
         return None
     cand.sort(key=lambda t: t.height)
-    h = np.array([t.height for t in cand])
-    adj = _adjacency(cand)
-    best: list[int] = []
-    for rise in np.arange(st.rise - RISE_TOL_M, st.rise + RISE_TOL_M + 1e-9, 0.005):
-        chain = _longest_chain(h, adj, float(rise))
-        if len(chain) > len(best):
-            best = chain
+    best = _best_chain(np.array([t.height for t in cand]), _adjacency(cand), st.rise - RISE_TOL_M, st.rise + RISE_TOL_M)
     if len(best) <= len(st.treads):
         return None
     found = unary_union([t.polygon for t in st.treads])
@@ -537,23 +536,22 @@ def _completed(st: StairElement, either: list[Tread], story: Story, above: Story
 
 
 def turned_pieces(mesh: Mesh, stairs: tuple[StairElement, ...]) -> np.ndarray:
-    """``(F,)`` the faces of the pieces of ``mesh`` (connected components) that hold more of a
-    stair's treads facing down (``StairElement.turned``) than facing up, by area: pieces the
-    winding repair turned over (their treads voted as a ceiling seen from the wrong side,
-    :func:`_completed`). Turned back, the upper flight and the walls that came with it face
-    into the rooms again, as the 3D models show them."""
-    out = np.zeros(mesh.n_faces, dtype=bool)
-    turned = [s.turned for s in stairs if len(s.turned)]
-    if not turned:
-        return out
+    """``(F,)`` the faces of the pieces of ``mesh`` (connected components) that hold more of the
+    stairs' treads facing down than facing up, by area: pieces the winding repair turned over
+    (their treads voted as a ceiling seen from the wrong side, :func:`_completed`). Turned
+    back, the upper flight and the walls that came with it face into the rooms again, as the
+    3D models show them."""
+    faces = [t.faces for s in stairs for t in s.treads]
+    if not faces:
+        return np.zeros(mesh.n_faces, dtype=bool)
+    tread = np.concatenate(faces)
+    ny = mesh.face_normals[tread, 1]
+    if not np.any(ny < 0):  # every stair found on up-facing treads alone: nothing turned
+        return np.zeros(mesh.n_faces, dtype=bool)
     comp = mesh.face_roots
-    down = np.concatenate(turned)
-    up = np.concatenate([t.faces for s in stairs if len(s.turned) for t in s.treads])
-    up = up[mesh.face_normals[up, 1] > 0]
-    areas = mesh.face_areas
-    n = int(comp.max()) + 1
-    balance = np.bincount(comp[down], weights=areas[down], minlength=n) - np.bincount(comp[up], weights=areas[up], minlength=n)
-    return balance[comp] > 0
+    # each tread face's area, signed by the way it faces: up counts for the piece as it is
+    vote = -np.sign(ny) * mesh.face_areas[tread]
+    return np.bincount(comp[tread], weights=vote, minlength=int(comp.max()) + 1)[comp] > 0
 
 
 #: The void is the part of the footprint (grown by this, m) the upper floor was not scanned over ...

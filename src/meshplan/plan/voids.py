@@ -20,7 +20,7 @@ scanned. It is found from what a scan shows of it, on a grid of :data:`CELL_M`:
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 import shapely
@@ -29,7 +29,7 @@ from shapely.geometry import Polygon
 from ..geometry import Mesh
 from ..orient.stories import slab_faces
 from .closure import straighten
-from .rooms import FloorRaster, _raster, footprint_raster, sample_triangles
+from .rooms import FloorRaster, _raster, floor_raster, footprint_raster, sample_triangles
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..orient import Orientation
@@ -77,18 +77,6 @@ class Void:
     polygon: Polygon
     kind: str = "double-height"
     source: str = "scan"
-    #: share of its outline along which walls rise past the upper floor
-    walled_share: float = 0.0
-
-    def to_dict(self, nd: int = 4) -> dict[str, Any]:
-        xy = np.asarray(self.polygon.exterior.coords)[:-1]
-        return {
-            "story": self.story,
-            "kind": self.kind,
-            "polygon": (np.round(xy, nd) + 0.0).tolist(),
-            "area": round(float(self.polygon.area), nd) + 0.0,
-            "source": self.source,
-        }
 
 
 def _cells(m: float) -> int:
@@ -120,15 +108,16 @@ def double_height_voids(
     out: list[Void] = []
     for k in range(1, len(stories)):
         lower, upper = stories[k - 1], stories[k]
-        below = slab_faces(heights, ny, (lower,), tolerance_m, ceilings=False) & (orientation.face_story == lower.index)
-        if not below.any():
+        floor = floor_raster(mesh, orientation, lower, tolerance_m, CELL_M)
+        if not floor.grid.any():
             continue
-        floor = _raster(sample_triangles(mesh.triangles[below], CELL_M)[:, [0, 2]], CELL_M)
+
         # the slab: the lower story's ceiling or the upper story's floor, either face of it
         slab_sel = slab_faces(heights, ny, (upper,), tolerance_m, ceilings=False)
         if lower.ceiling_found:
             slab_sel |= slab_faces(heights, ny, (lower,), tolerance_m, floors=False)
-        slab = _raster(sample_triangles(mesh.triangles[slab_sel], CELL_M)[:, [0, 2]], CELL_M, like=floor).grid
+        slab = _covered(mesh, slab_sel, floor)
+        # what was seen over the upper floor: the corners of its faces mark their cells
         high = (heights > upper.floor + ABOVE_FLOOR_M) & (heights < upper.top)
         seen_above = _raster(mesh.vertices[mesh.faces[high]].reshape(-1, 3)[:, [0, 2]], CELL_M, like=floor).grid
         under = ndimage.binary_fill_holes(ndimage.binary_closing(floor.grid, iterations=_cells(FLOOR_CLOSING_M)))
@@ -136,7 +125,7 @@ def double_height_voids(
         stands = footprint_raster(mesh, orientation, lower, floor, FLOOR_CLOSING_M).grid | under
         # ... up to the walls' faces: what stands above the furniture, vertical
         upright = (np.abs(ny) < WALL_NORMAL_Y) & (heights > lower.floor + WALL_ABOVE_M) & (heights < lower.top)
-        stands &= ~_raster(sample_triangles(mesh.triangles[upright], CELL_M)[:, [0, 2]], CELL_M, like=floor).grid
+        stands &= ~_covered(mesh, upright, floor)
         open_ = under & ~ndimage.binary_dilation(slab, iterations=_cells(SLAB_GROWTH_M))
         open_ = ndimage.binary_opening(open_, iterations=max(1, _cells(MIN_WIDTH_M) // 2))
         mine = [p.buffer(STAIR_CLEARANCE_M) for st in stairs if upper.index in (st.story, st.to_story) for p in (st.footprint, st.void) if p is not None]
@@ -150,8 +139,7 @@ def double_height_voids(
             if comp.sum() * CELL_M**2 < MIN_AREA_M2:
                 continue
             edge = comp & ~ndimage.binary_erosion(comp)
-            walled = float(walls_near[edge].mean())
-            if walled < WALLED_SHARE:
+            if walls_near[edge].mean() < WALLED_SHARE:
                 continue
             # out to the slab's edge and to the walls (the floor under the furniture along them)
             comp = ndimage.binary_dilation(comp, iterations=_cells(OUTLINE_BAND_M), mask=stands & ~slab)
@@ -165,8 +153,13 @@ def double_height_voids(
             # a raster's stepped edge as the rectangle it fills, where one does (as a room closed
             # by its scanned floor is drawn), less the stairs' openings
             poly = straighten(poly, openings, FIT_M, SMOOTH_M)
-            out.append(Void(upper.index, shapely.orient_polygons(poly), walled_share=walled))
+            out.append(Void(upper.index, shapely.orient_polygons(poly)))
     return tuple(out)
+
+
+def _covered(mesh: Mesh, faces: np.ndarray, grid: FloorRaster) -> np.ndarray:
+    """The cells of ``grid`` that the faces in the mask ``faces`` cover."""
+    return _raster(sample_triangles(mesh.triangles[faces], CELL_M)[:, [0, 2]], CELL_M, like=grid).grid
 
 
 def _inside(poly, raster: FloorRaster, shape: tuple[int, int]) -> np.ndarray:

@@ -380,14 +380,11 @@ def _draw_stairs(ax, symbols: PlanSymbols, sheet: Sheet) -> tuple[list, list]:
         ax.add_collection(LineCollection(hidden, linewidths=0.35, linestyles=STAIR_HIDDEN_DASH, **kw))
     if cuts:
         ax.add_collection(LineCollection(cuts, linewidths=0.6, **kw))
-    if crosses:
-        ax.add_collection(LineCollection(crosses, linewidths=0.25, **kw))
+    _draw_void_lines(ax, voids, crosses)
     if walks:
         ax.add_collection(LineCollection(walks, linewidths=0.45, zorder=5.5, colors=STAIR_COLOR))
     if walks_hidden:
         ax.add_collection(LineCollection(walks_hidden, linewidths=0.45, linestyles=STAIR_HIDDEN_DASH, zorder=5.5, colors=STAIR_COLOR))
-    if voids:
-        ax.add_collection(LineCollection(voids, linewidths=0.7, linestyles=VOID_DASH, **kw))
     out += [shapely.LineString(seg) for seg in (*solid, *hidden, *crosses)]
     out += [shapely.LineString(c) for c in (*cuts, *walks, *walks_hidden, *voids)]
     legend = [(Line2D([0, 1], [0, 0], color=STAIR_COLOR, lw=0.45, marker=">", markersize=3.5, markevery=[-1]), "stair: walking line, arrow up")]
@@ -398,19 +395,27 @@ def _draw_stairs(ax, symbols: PlanSymbols, sheet: Sheet) -> tuple[list, list]:
     return out, legend
 
 
+def _draw_void_lines(ax, rings: list, crosses: list) -> None:
+    """Holes in a floor: their outlines dash-dotted, their crosses thin (a stair's void and a
+    double-height space's alike)."""
+    from matplotlib.collections import LineCollection
+
+    kw: dict[str, Any] = dict(colors=STAIR_COLOR, zorder=2.8)
+    if rings:
+        ax.add_collection(LineCollection(rings, linewidths=0.7, linestyles=VOID_DASH, **kw))
+    if crosses:
+        ax.add_collection(LineCollection(crosses, linewidths=0.25, **kw))
+
+
 def _draw_voids(ax, symbols: PlanSymbols) -> tuple[list, list]:
     """The holes in the floor over double-height spaces, outlined dash-dotted and crossed as a
     stair's void is. Returns their lines (for texts to avoid) and the legend entry."""
     import shapely
-    from matplotlib.collections import LineCollection
     from matplotlib.lines import Line2D
 
     if not symbols.voids:
         return [], []
-    kw: dict[str, Any] = dict(colors=STAIR_COLOR, zorder=2.8)
-    ax.add_collection(LineCollection(list(symbols.voids), linewidths=0.7, linestyles=VOID_DASH, **kw))
-    if len(symbols.void_crosses):
-        ax.add_collection(LineCollection(list(symbols.void_crosses), linewidths=0.25, **kw))
+    _draw_void_lines(ax, list(symbols.voids), list(symbols.void_crosses))
     lines = [shapely.LineString(r) for r in symbols.voids] + [shapely.LineString(s) for s in symbols.void_crosses]
     return lines, [(Line2D([], [], color=STAIR_COLOR, lw=0.7, ls=VOID_DASH), "void in the floor (double-height space)")]
 
