@@ -59,3 +59,25 @@ def test_the_command_keeps_freed_memory() -> None:
     child = _CHILD.replace("from meshplan._memory import keep_freed_memory", "sys.argv[0] = 'meshplan'; import meshplan.cli")
     out = subprocess.run([sys.executable, "-c", child, "command"], capture_output=True, text=True, check=True)
     assert int(out.stdout.strip()) <= 2 * 2**20
+
+
+_PAGES_CHILD = """
+import sys
+sys.argv[0] = "meshplan"
+import meshplan.cli  # loaded as the program, before numpy
+import numpy._core.multiarray as m
+print(m._set_madvise_hugepage(False))  # the previous setting: whether numpy asks for huge pages
+"""
+
+
+def test_the_command_keeps_numpy_from_asking_for_huge_pages() -> None:
+    # each huge page faulted in is a 2 MiB round trip to the host in a virtual machine that hands
+    # free memory back (meshplan._memory): the command keeps numpy's arrays in small pages
+    import os
+
+    env = {k: v for k, v in os.environ.items() if k != "NUMPY_MADVISE_HUGEPAGE"}
+    out = subprocess.run([sys.executable, "-c", _PAGES_CHILD], capture_output=True, text=True, check=True, env=env)
+    assert out.stdout.strip() == "False"
+    # the user's own setting is left alone
+    out = subprocess.run([sys.executable, "-c", _PAGES_CHILD], capture_output=True, text=True, check=True, env={**env, "NUMPY_MADVISE_HUGEPAGE": "1"})
+    assert out.stdout.strip() == "True"

@@ -42,9 +42,10 @@ _STARTING = _PROGRAM and threading.current_thread() is threading.main_thread() a
 if _STARTING:
     signal.signal(signal.SIGINT, _interrupted_while_starting)
 if _PROGRAM:
-    from ._memory import keep_freed_memory
+    from ._memory import keep_freed_memory, small_pages
 
     keep_freed_memory()  # before numpy allocates: every array of the run reuses freed memory
+    small_pages()  # before numpy loads: its large arrays in small pages (see meshplan._memory)
 
 import typer  # noqa: E402 - after the handler above: this import takes a while
 
