@@ -279,6 +279,24 @@ def test_slicing_gives_the_former_segments_bit_for_bit(kind):
     np.testing.assert_array_equal(s.face, face)
 
 
+@pytest.mark.parametrize("kind", ["grid", "noise"])
+def test_slicing_the_faces_a_plane_cuts_gives_the_slice_of_all(kind):
+    """slice_faces gathers only the faces the plane cuts: the same segments, in the same order,
+    as slicing every selected face, corners exactly on the plane included (the grid)."""
+    from meshplan.slicing import slice_faces
+
+    rng = np.random.default_rng(1)
+    tri = rng.integers(0, 6, size=(20_000, 3, 3)) * 0.5 if kind == "grid" else rng.normal(size=(20_000, 3, 3))
+    faces = np.sort(rng.choice(len(tri), size=12_000, replace=False))
+    for height in (0.5, 1.0, 0.25, -3.0):
+        whole = slice_mesh(tri[faces], [height])
+        s = slice_faces(tri, faces, height)
+        assert len(s.segments) == len(whole.segments) and (height == -3.0 or len(s.segments) > 100)
+        np.testing.assert_array_equal(s.segments, whole.segments)
+        np.testing.assert_array_equal(s.face, whole.face)
+        np.testing.assert_array_equal(s.level, whole.level)
+
+
 def test_slicing_an_edge_on_a_plane_gives_it_once_from_the_triangle_below():
     """The module's rule: a vertex exactly on a plane counts as above it, so an edge lying in a
     plane comes once, from the triangle below it, and a vertex touching it gives nothing."""

@@ -115,6 +115,32 @@ def slice_mesh(triangles: ArrayLike, heights: ArrayLike) -> Slices:
     return Slices(h, seg[real], level[real].astype(np.int64), faces[real].astype(np.int64))
 
 
+def slice_faces(triangles: np.ndarray, faces: ArrayLike, height: float) -> Slices:
+    """:func:`slice_mesh` of ``triangles[faces]`` at the one plane ``y = height``, the same
+    slice, with ``face`` indexing ``faces``: only the faces the plane cuts are gathered (a
+    story's whole set of corners, 216 MB at 3M faces, made the drafting height's reference
+    slice cost 0.45 s; a plane cuts a few per cent of them).
+
+    Parameters
+    ----------
+    triangles
+        ``(F, 3, 3)`` triangle corners (y up) of a whole mesh.
+    faces
+        Indices into ``triangles`` of the faces to slice.
+    height
+        The plane's height.
+    """
+    faces = np.asarray(faces, dtype=np.int64).reshape(-1)
+    y = triangles[:, :, 1]  # a view: only the faces asked for are read
+    fy = y[faces]
+    lo = np.minimum(np.minimum(fy[:, 0], fy[:, 1]), fy[:, 2])
+    hi = np.maximum(np.maximum(fy[:, 0], fy[:, 1]), fy[:, 2])
+    # the faces slice_mesh lets the plane cut: the lowest corner below it, the highest at or above
+    cut = np.flatnonzero((lo < height) & (hi >= height))
+    out = slice_mesh(triangles[faces[cut]], np.array([float(height)]))
+    return Slices(out.heights, out.segments, out.level, cut[out.face])
+
+
 def chain_segments(segments: ArrayLike, tolerance: float = 1e-6) -> list[FloatArray]:
     """Join segments that share end points into polylines.
 
