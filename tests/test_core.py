@@ -295,6 +295,12 @@ def test_slicing_the_faces_a_plane_cuts_gives_the_slice_of_all(kind):
         np.testing.assert_array_equal(s.segments, whole.segments)
         np.testing.assert_array_equal(s.face, whole.face)
         np.testing.assert_array_equal(s.level, whole.level)
+    # every plane at once, the selected faces read in place (slice_mesh's select)
+    h = np.arange(-1.0, 2.51, 0.25)
+    whole, s = slice_mesh(tri[faces], h), slice_mesh(tri, h, faces)
+    assert len(whole.segments) > 1000
+    for a, b in ((s.segments, whole.segments), (s.face, whole.face), (s.level, whole.level)):
+        np.testing.assert_array_equal(a, b)
 
 
 def test_slicing_an_edge_on_a_plane_gives_it_once_from_the_triangle_below():

@@ -63,7 +63,7 @@ def plane_heights(floor: float, ceiling: float, n: int) -> FloatArray:
 _ODD_CORNER = np.array([-1, 0, 1, 2, 2, 1, 0, -1], dtype=np.int64)
 
 
-def slice_mesh(triangles: ArrayLike, heights: ArrayLike) -> Slices:
+def slice_mesh(triangles: ArrayLike, heights: ArrayLike, select: ArrayLike | None = None) -> Slices:
     """Intersect triangles with the horizontal planes ``y = heights[i]``.
 
     Parameters
@@ -72,21 +72,27 @@ def slice_mesh(triangles: ArrayLike, heights: ArrayLike) -> Slices:
         ``(F, 3, 3)`` triangle corners (y up).
     heights
         ``(n,)`` increasing plane heights.
+    select
+        Indices of the triangles to slice (all by default): the slices of
+        ``triangles[select]``, ``face`` indexing ``select``, without that copy of their corners
+        (a story's, 216 MB at 3M faces; only their heights are gathered).
     """
     tri = np.asarray(triangles, dtype=np.float64).reshape(-1, 3, 3)
     h = np.asarray(heights, dtype=np.float64).reshape(-1)
     if len(h) > 1 and np.any(np.diff(h) <= 0):
         raise ParameterError("slice heights must be increasing", "check the floor and ceiling heights")
     empty = Slices(h, np.zeros((0, 2, 2)), np.zeros(0, np.int64), np.zeros(0, np.int64))
-    if not len(tri) or not len(h):
+    rows = None if select is None else np.asarray(select, dtype=np.int64).reshape(-1)
+    if not len(tri) or not len(h) or (rows is not None and not len(rows)):
         return empty
-    y = tri[:, :, 1]
-    lo, hi = y.min(axis=1), y.max(axis=1)
+    y = tri[:, :, 1] if rows is None else tri[rows, :, 1]
+    lo = np.minimum(np.minimum(y[:, 0], y[:, 1]), y[:, 2])  # y.min(axis=1), the same numbers, faster
+    hi = np.maximum(np.maximum(y[:, 0], y[:, 1]), y[:, 2])
     # planes strictly above the lowest vertex and at or below the highest one can cut
     first = np.searchsorted(h, lo, side="right")
     last = np.searchsorted(h, hi, side="right")
     count = last - first
-    faces = np.repeat(np.arange(len(tri)), count)
+    faces = np.repeat(np.arange(len(y)), count)
     if not len(faces):
         return empty
     level = np.repeat(first - np.cumsum(count) + count, count) + np.arange(len(faces))
@@ -101,7 +107,7 @@ def slice_mesh(triangles: ArrayLike, heights: ArrayLike) -> Slices:
     # corners read by flat index from (x, z) of every corner: no (S, 3, 3) copy of the triangles
     xz = tri[:, :, ::2].reshape(-1, 2)
     heights_flat = d.reshape(-1)
-    pair, corner = cut * 3, faces * 3
+    pair, corner = cut * 3, (faces if rows is None else rows[faces]) * 3
     p0 = xz[corner + odd]
     d0 = heights_flat[pair + odd]
 
@@ -137,7 +143,7 @@ def slice_faces(triangles: np.ndarray, faces: ArrayLike, height: float) -> Slice
     hi = np.maximum(np.maximum(fy[:, 0], fy[:, 1]), fy[:, 2])
     # the faces slice_mesh lets the plane cut: the lowest corner below it, the highest at or above
     cut = np.flatnonzero((lo < height) & (hi >= height))
-    out = slice_mesh(triangles[faces[cut]], np.array([float(height)]))
+    out = slice_mesh(triangles, np.array([float(height)]), faces[cut])
     return Slices(out.heights, out.segments, out.level, cut[out.face])
 
 

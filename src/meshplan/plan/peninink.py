@@ -34,4 +34,4 @@ def pen_and_ink(
     slab = slab_faces(mesh.face_centroids[:, 1], mesh.face_normals[:, 1], (story,), slab_tolerance_m)
     faces = np.flatnonzero((orientation.face_story == story.index) & ~slab)
     heights = plane_heights(story.floor, story.ceiling, params.slices)
-    return PenAndInkPlan(story, slice_mesh(mesh.triangles[faces], heights))
+    return PenAndInkPlan(story, slice_mesh(mesh.triangles, heights, faces))
