@@ -23,6 +23,7 @@ def levels_figure(orientation: Orientation, params: RenderParams):
     histogram (a candidate level: :class:`meshplan.orient.levels.Spike`) a red marker at the tip
     of its bar, all in the legend. The plot is as wide as its labels leave room for."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.collections import PolyCollection
     from matplotlib.figure import Figure
     from matplotlib.lines import Line2D
 
@@ -32,7 +33,12 @@ def levels_figure(orientation: Orientation, params: RenderParams):
     fig = Figure(figsize=(fw, fh), dpi=150)
     ax = fig.add_axes((_LEVELS_LEFT_IN / fw, 0.11, 0.8, 0.8))
     centres = 0.5 * (lv.edges[:-1] + lv.edges[1:])
-    ax.barh(centres / unit, lv.weights, height=np.diff(lv.edges) / unit, color="#7f7f7f", linewidth=0)
+    # the bars as one collection of rectangles: barh makes an artist of each (58 on the
+    # benchmark apartment, 0.1 s of the figure's 0.2 s)
+    y0, y1 = (centres - np.diff(lv.edges) / 2) / unit, (centres + np.diff(lv.edges) / 2) / unit
+    w = np.asarray(lv.weights, dtype=np.float64)
+    bars = np.stack([np.c_[np.zeros_like(w), y0], np.c_[w, y0], np.c_[w, y1], np.c_[np.zeros_like(w), y1]], axis=1)
+    ax.add_collection(PolyCollection(bars, facecolors="#7f7f7f", linewidths=0))
     xmax = float(lv.weights.max()) if len(lv.weights) else 1.0
     labels = []
     to_right = ax.get_yaxis_transform()  # x in axes fractions, y in heights
@@ -81,6 +87,7 @@ def normals_figure(normals: FloatArray, areas: FloatArray, orientation: Orientat
     south pole to the north pole) with the cluster centres, as the paper's Fig. "heatmap1"."""
     from matplotlib.colors import LogNorm
     from matplotlib.figure import Figure
+    from matplotlib.ticker import FuncFormatter
 
     theta, phi = to_spherical(normals)
     # 2-degree buckets (bincount: histogram2d is several times slower)
@@ -97,6 +104,9 @@ def normals_figure(normals: FloatArray, areas: FloatArray, orientation: Orientat
     cb.set_label("face area per bucket (m²)", fontsize=7)
     cb.ax.tick_params(labelsize=6)
     cb.ax.minorticks_off()  # a log colour bar has dozens of minor ticks, slow to draw
+    # plain numbers (0.01, 1e-05): the default labels (10 to a power) are set as math text, whose
+    # parser a fresh drawing worker builds for them alone (0.07 s of the figure's 0.13 s)
+    cb.ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
     centres = [d.normal for d in orientation.alignment.directions] + [np.array([0.0, 1.0, 0.0]), np.array([0.0, -1.0, 0.0])]
     ct, cp = to_spherical(np.array(centres))
     ax.scatter(ct, cp, s=40, facecolors="none", edgecolors="#00e5ff", linewidths=1.3)
