@@ -38,7 +38,7 @@ def levels_figure(orientation: Orientation, params: RenderParams):
     y0, y1 = (centres - np.diff(lv.edges) / 2) / unit, (centres + np.diff(lv.edges) / 2) / unit
     w = np.asarray(lv.weights, dtype=np.float64)
     bars = np.stack([np.c_[np.zeros_like(w), y0], np.c_[w, y0], np.c_[w, y1], np.c_[np.zeros_like(w), y1]], axis=1)
-    ax.add_collection(PolyCollection(bars, facecolors="#7f7f7f", linewidths=0))
+    ax.add_collection(PolyCollection(list(bars), facecolors="#7f7f7f", linewidths=0))
     xmax = float(lv.weights.max()) if len(lv.weights) else 1.0
     labels = []
     to_right = ax.get_yaxis_transform()  # x in axes fractions, y in heights
