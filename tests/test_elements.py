@@ -340,26 +340,3 @@ def shapely_points_near(room, wall, probe_m, slack_m):
     a, b = np.asarray(wall.start), np.asarray(wall.end)
     p = a + 0.9 * (b - a) + (wall.thickness / 2 + probe_m) * wall.normal
     return (room.distance(Point(p)) <= slack_m,)
-
-
-def test_the_faces_around_the_openings_hold_every_face_each_opening_looks_at():
-    """opening_elements keeps, in one pass, the faces in the cells around any opening
-    (elements._around_any), then each opening searches those: every face its square holds must
-    be among them, those on its edges too, and most of the others left out."""
-    from meshplan.plan.elements import _around_any
-
-    rng = np.random.default_rng(3)
-    centers = rng.uniform(0.0, 20.0, size=(12, 2))
-    reach = rng.uniform(0.6, 3.0, size=12)
-    xz = rng.uniform(-5.0, 25.0, size=(200_000, 2))
-    # points exactly on the squares' edges and corners
-    edges = np.concatenate([centers + reach[:, None] * s for s in (np.array([1.0, 0.0]), np.array([-1.0, 1.0]), np.array([1.0, -1.0]))])
-    xz = np.concatenate([xz, edges])
-    kept = _around_any(xz, centers, reach)
-    square = np.zeros(len(xz), dtype=bool)
-    for c, r in zip(centers, reach):
-        square |= (np.abs(xz[:, 0] - c[0]) <= r) & (np.abs(xz[:, 1] - c[1]) <= r)
-    assert square[-len(edges):].sum() >= len(edges) // 2  # (rounding puts some just outside)
-    assert not (square & ~kept).any()
-    assert kept.sum() < 0.75 * len(xz)
-    assert not _around_any(xz, np.zeros((0, 2)), np.zeros(0)).any()

@@ -590,35 +590,6 @@ class _Near:
         return cls(every.xz[ok], every.y[ok], every.normal[ok], every.area[ok])
 
 
-#: Side (m) of the cells that mark where openings are (:func:`_around_any`): coarse, so that
-#: marking a few tens of openings' squares costs nothing; any size gives the same faces.
-AROUND_CELL_M = 0.5
-
-
-def _around_any(xz: FloatArray, centers: FloatArray, reach: FloatArray) -> np.ndarray:
-    """Which of the plan points ``xz`` lie in the cells of :data:`AROUND_CELL_M` that the
-    squares of half-side ``reach`` around ``centers`` touch, or next to them: every point of
-    every square and a few more (what :meth:`_Near.around` keeps of them is what it keeps of all the points; one
-    pass over the points instead of one per opening, 0.23 s at 3M faces)."""
-    if not len(centers) or not len(xz):
-        return np.zeros(len(xz), dtype=bool)
-    # a cell more on every side: a point on a square's edge, within rounding, is in one of them
-    lo = np.min(centers - reach[:, None], axis=0) - AROUND_CELL_M
-    hi = np.max(centers + reach[:, None], axis=0) + AROUND_CELL_M
-    shape = np.floor((hi - lo) / AROUND_CELL_M).astype(np.int64) + 1
-    marked = np.zeros(tuple(shape), dtype=bool)
-    first = np.floor((centers - reach[:, None] - lo) / AROUND_CELL_M).astype(np.int64) - 1
-    last = np.floor((centers + reach[:, None] - lo) / AROUND_CELL_M).astype(np.int64) + 1
-    for (a0, a1), (b0, b1) in zip(np.maximum(first, 0), np.minimum(last, shape - 1)):
-        marked[a0 : b0 + 1, a1 : b1 + 1] = True
-    cell = np.floor((xz - lo) / AROUND_CELL_M)
-    inside = np.all((cell >= 0) & (cell < shape), axis=1)
-    out = np.zeros(len(xz), dtype=bool)
-    idx = cell[inside].astype(np.int64)
-    out[inside] = marked[idx[:, 0], idx[:, 1]]
-    return out
-
-
 def _hole_seen(near: _Near, walls: FlatWalls, face: int, u0: float, u1: float, bottom: float, top: float) -> bool:
     """Whether face ``face`` shows the opening ``[u0, u1] x [bottom, top]`` as a hole with wall
     beside both jambs (:data:`HOLE_EMPTY_SHARE`)."""
@@ -787,16 +758,8 @@ def opening_elements(
     window_w = (params.window_width_m[0], params.window_width_m[1] * (1 + ODD_WIDTH_MARGIN))
     carrier = wall_of_face(physical, len(walls))
     centers = openings.center(walls) if len(openings) else np.zeros((0, 2))
-    # how far around each opening its faces are looked at (a square): its leaf's swing and more
-    reach = np.zeros(len(openings))
-    for i in range(len(openings)):
-        f = int(openings.wall[i])
-        k = int(carrier[f]) if 0 <= f < len(carrier) else -1
-        reach[i] = 2.0 * float(openings.u_max[i] - openings.u_min[i]) + (physical[k].thickness if k >= 0 else 0.0) + 0.5
-    #: faces standing within 30 degrees of vertical: walls, jambs and door leaves; of them, those
-    #: around some opening (every opening then searches these, not the whole mesh's)
+    #: faces standing within 30 degrees of vertical: walls, jambs and door leaves
     vertical = np.flatnonzero(np.abs(mesh.face_normals[:, 1]) < 0.5) if len(openings) else np.zeros(0, np.int64)
-    vertical = vertical[_around_any(mesh.face_centroids[vertical][:, [0, 2]], centers, reach)]
     c3 = mesh.face_centroids[vertical]
     every = _Near(c3[:, [0, 2]], c3[:, 1], mesh.face_normals[vertical][:, [0, 2]], mesh.face_areas[vertical])
     out = []
@@ -820,7 +783,7 @@ def opening_elements(
                 sides.append(None)
         width = float(openings.u_max[i] - openings.u_min[i])
         height = float(openings.top[i] - openings.bottom[i])
-        near = _Near.around(every, c, float(reach[i]))
+        near = _Near.around(every, c, 2.0 * width + thickness + 0.5)
         swing = None
         opens_to: int | str | None = None
         if kind == "door":
