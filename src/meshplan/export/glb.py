@@ -29,7 +29,8 @@ def submesh(mesh: Mesh, faces: np.ndarray) -> Mesh:
     index = np.flatnonzero(used)
     remap = np.zeros(mesh.n_vertices, dtype=np.int64)
     remap[index] = np.arange(len(index))
-    return Mesh(mesh.vertices[index], remap[sel].reshape(-1, 3))
+    # fresh arrays, valid indices: taken as they are (Mesh() would copy and check them)
+    return Mesh._adopt(mesh.vertices[index], remap[sel].reshape(-1, 3))
 
 
 #: glTF accessor component types (GL enums) and bufferView alignment (bytes).

@@ -1157,9 +1157,12 @@ def find_flat_walls(mesh: Mesh, orientation: Orientation, params: WallParams | N
     """
     params = params or WallParams()
     in_stories = orientation.face_story >= 0
+    # (every face is in a story but where a caller marked some out: no copies then)
+    every = bool(in_stories.all())
     dirs = wall_directions(
-        orientation, params.wall_directions, mesh.face_normals[in_stories], mesh.face_areas[in_stories], params.facing_tolerance_deg,
-        mesh.face_centroids[in_stories],
+        orientation, params.wall_directions,
+        mesh.face_normals if every else mesh.face_normals[in_stories], mesh.face_areas if every else mesh.face_areas[in_stories],
+        params.facing_tolerance_deg, mesh.face_centroids if every else mesh.face_centroids[in_stories],
     )
     width = params.box_length_m / 2  # columns: the resolution along the wall of a DBSCAN box
     cos_tol = np.cos(np.radians(params.facing_tolerance_deg))
