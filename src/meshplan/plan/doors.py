@@ -261,7 +261,7 @@ class WallEvidence:
             sn = sums / np.maximum(np.linalg.norm(sums, axis=1), 1e-12)[:, None]
             self.segment_normal[ok] = sn[seg[ok]]
         self.segment = seg
-        self._cache: dict[tuple, tuple[FloatArray, IntArray, IntArray]] = {}
+        self._cache: dict[tuple, tuple[tuple[FloatArray, FloatArray], IntArray, IntArray]] = {}
         self._ajar: dict[int, tuple[FloatArray, FloatArray, float] | None] = {}
         self._segment_offset: FloatArray | None = None
         self._panels: tuple[IntArray, IntArray] | None = None
@@ -313,9 +313,9 @@ class WallEvidence:
             self._ajar[segment] = (depth * n + 0.5 * (lo + hi) * t, n, 0.5 * (hi - lo)) if leafy else None
         return self._ajar[segment]
 
-    def _sorted(self, key: tuple, w: int, faces: IntArray) -> tuple[FloatArray, IntArray, IntArray]:
+    def _sorted(self, key: tuple, w: int, faces: IntArray) -> tuple[tuple[FloatArray, FloatArray], IntArray, IntArray]:
         """``faces`` with a small reach and their centroids' positions along face ``w``'s
-        direction normal and along its tangent (``(2, n)``), and those with a large reach
+        direction normal and along its tangent (two ``(n,)`` arrays), and those with a large reach
         (parametric triangles), cached by ``key``. (Not sorted: a pass over the positions per
         face searched costs less than the sort, and every use of the faces found is independent
         of their order.)"""
@@ -325,7 +325,7 @@ class WallEvidence:
             big = self.radius[faces] > BIG_FACE_M
             small = faces[~big]
             c = self.centroids[small]
-            self._cache[key] = (np.stack([c @ n3, c @ t3]), small, faces[big])
+            self._cache[key] = ((c @ n3, c @ t3), small, faces[big])
         return self._cache[key]
 
     def _direction_normal(self, w: int) -> FloatArray:
