@@ -42,7 +42,8 @@ from meshplan.synthetic import SynthParams, generate
 d = pathlib.Path(tempfile.mkdtemp())
 write_synthetic(generate(SynthParams(preset="room", seed=1)), d, "ply", force=True)
 r = meshplan.run(d / "scan.ply")
-files = {**_normals_files(r.mesh.face_normals, r.mesh.face_areas, r.orientation), **_levels_files(r.orientation, r.options.render)}
+from meshplan.render.plots import normals_histogram
+files = {**_normals_files(normals_histogram(r.mesh.face_normals, r.mesh.face_areas), r.orientation), **_levels_files(r.orientation, r.options.render)}
 assert sorted(files) == ["levels.png", "normals.png"] and all(v.startswith(bytes([137]) + b"PNG") for v in files.values())
 print(getattr(MathTextParser, "_parser", None) is None)
 """

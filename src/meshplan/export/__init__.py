@@ -21,7 +21,8 @@ from ..render import (
     figure_files,
     levels_figure,
     make_sheet,
-    normals_figure,
+    normals_heat_map,
+    normals_histogram,
     pen_and_ink_figure,
     segments_figure,
 )
@@ -79,8 +80,9 @@ def _segments_files(centroids, walls, story: int, sheet, params, n_stories: int)
     return {f"wall-segments-{story}.png": figure_bytes(segments_figure(centroids, walls, story, sheet, params, n_stories), "png")}
 
 
-def _normals_files(normals, areas, orientation) -> dict[str, bytes]:
-    return {"normals.png": figure_bytes(normals_figure(normals, areas, orientation), "png")}
+def _normals_files(hist, orientation) -> dict[str, bytes]:
+    """normals.png from the faces' direction histogram (:func:`~meshplan.render.plots.normals_histogram`)."""
+    return {"normals.png": figure_bytes(normals_heat_map(hist, orientation), "png")}
 
 
 def _levels_files(orientation, params) -> dict[str, bytes]:
@@ -149,7 +151,7 @@ def _upright_jobs(orientation: Orientation, mesh: Mesh, params: RenderParams) ->
     # the figures read the orientation's levels, stories and wall directions, not its per-face
     # arrays (2.7 MB of the 300k-face apartment's, pickled to the worker for each figure)
     light = replace(orientation, face_story=orientation.face_story[:0], flipped=orientation.flipped[:0])
-    return [(_normals_files, mesh.face_normals, mesh.face_areas, light), (_levels_files, light, params)]
+    return [(_normals_files, normals_histogram(mesh.face_normals, mesh.face_areas), light), (_levels_files, light, params)]
 
 
 def _drawn_slices(pen: PenAndInkPlan) -> PenAndInkPlan:

@@ -15,7 +15,7 @@ from .params import RenderParams
 
 if TYPE_CHECKING:  # pragma: no cover
     from .plans import drafting_figure, pen_and_ink_figure, pen_and_ink_raster, segments_figure
-    from .plots import levels_figure, normals_figure
+    from .plots import levels_figure, normals_figure, normals_heat_map, normals_histogram
     from .sheet import Sheet, figure_bytes, figure_files, make_sheet
 
 #: Where each lazily loaded name lives (a submodule of this package).
@@ -26,6 +26,8 @@ _EXPORTS = {
     "segments_figure": "plans",
     "levels_figure": "plots",
     "normals_figure": "plots",
+    "normals_heat_map": "plots",
+    "normals_histogram": "plots",
     "Sheet": "sheet",
     "figure_bytes": "sheet",
     "figure_files": "sheet",
@@ -41,6 +43,8 @@ __all__ = [
     "levels_figure",
     "make_sheet",
     "normals_figure",
+    "normals_heat_map",
+    "normals_histogram",
     "pen_and_ink_figure",
     "pen_and_ink_raster",
     "segments_figure",
