@@ -639,3 +639,33 @@ def test_a_strip_missing_from_a_wall_scanned_to_the_ceiling_is_no_headless_windo
     frame = _Frame(grid, f.lo, f.floor, f.ceiling, f.cell, f.margin, np.zeros(0), np.zeros(0), 0, False, False)
     walls = SimpleNamespace(u_min=np.array([0.0]), u_max=np.array([6.0]))
     assert [c for c in _notch_windows(frame, walls, PlanParams()) if c.kind == "window"] == []
+
+
+@pytest.mark.parametrize("turn_deg", [0.0, 8.0, 30.0])
+def test_the_faces_a_walls_box_may_hold_are_all_found(turn_deg: float) -> None:
+    """WallEvidence.slab_faces narrows the faces a search reads to a window along its
+    direction's axes, across the wall and along it; the search (near) then keeps those whose
+    reach meets the box in the face's own frame. Whatever the face's turn from its direction,
+    the window must hold every face the search would keep of all of them."""
+    from meshplan.plan.doors import BIG_FACE_M, WallEvidence
+
+    rng = np.random.default_rng(int(turn_deg))
+    a = np.radians(turn_deg)
+    n, t = np.array([np.sin(a), np.cos(a)]), np.array([np.cos(a), -np.sin(a)])
+    walls = SimpleNamespace(normal=n[None], tangent=t[None], offset=np.array([2.0]), direction=np.array([0]), directions=np.array([[0.0, 1.0]]))
+    ev = object.__new__(WallEvidence)
+    ev.walls, ev._cache = walls, {}
+    count = 60_000
+    ev.centroids = np.c_[rng.uniform(-4, 8, count), rng.uniform(0, 3, count), rng.uniform(-4, 8, count)]
+    ev.radius = np.where(rng.random(count) < 0.98, rng.uniform(0.3, BIG_FACE_M, count), rng.uniform(BIG_FACE_M, 2.0, count))
+    faces = np.arange(count)
+    n3, t3 = np.array([n[0], 0.0, n[1]]), np.array([t[0], 0.0, t[1]])
+    found = 0
+    for _ in range(40):
+        d0, u0 = rng.uniform(-0.5, 0.3), rng.uniform(-2.0, 4.0)
+        box_d, box_u, box_y = (d0, d0 + rng.uniform(0.0, 0.4)), (u0, u0 + rng.uniform(0.0, 2.0)), (0.5, 2.0)
+        every = ev.near(faces, n3, t3, 2.0, box_d, box_u, box_y)
+        some = ev.near(ev.slab_faces(faces, ("test",), 0, box_d, box_u), n3, t3, 2.0, box_d, box_u, box_y)
+        assert set(some.tolist()) == set(every.tolist())
+        found += len(every)
+    assert found > 1000

@@ -349,9 +349,12 @@ class WallEvidence:
         across = [float(n_dir @ c) for c in box]
         along = [float(t_dir @ c) for c in box]
         # along the direction too: a reveal's box is a few decimetres of a wall several metres
-        # long, whose faces the search then reads (0.34 s of the 3M-face apartment's openings)
-        keep = (pos[0] >= min(across) - BIG_FACE_M) & (pos[0] < max(across) + BIG_FACE_M)
-        keep &= (pos[1] >= min(along) - BIG_FACE_M) & (pos[1] < max(along) + BIG_FACE_M)
+        # long, whose faces the search then reads (0.34 s of the 3M-face apartment's openings).
+        # The search (:meth:`near`) widens the box by a face's reach along the face's own axes:
+        # seen along the direction's axes, turned from them, that is up to sqrt(2) times as far
+        reach = np.sqrt(2.0) * BIG_FACE_M
+        keep = (pos[0] >= min(across) - reach) & (pos[0] < max(across) + reach)
+        keep &= (pos[1] >= min(along) - reach) & (pos[1] < max(along) + reach)
         return np.concatenate([small[keep], big])
 
     def facing(self, w: int, d_range: tuple[float, float], u_range: tuple[float, float]) -> IntArray:
