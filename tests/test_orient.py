@@ -374,3 +374,28 @@ def test_a_model_of_big_boxes_in_metres_is_no_unit_mistake():
     # the same model in centimetres is still refused (2.6 m tall in no direction)
     with pytest.raises(GeometryError, match="implausible scale.*--units"):
         orient(Mesh(v * 100.0, f))
+
+
+def test_slab_faces_are_the_horizontal_faces_near_a_floor_or_a_ceiling():
+    """slab_faces tests the heights of the horizontal faces alone: the same faces as the test
+    of every face (horizontal and near a slab), floors and ceilings each on or off."""
+    from meshplan.orient import Story
+    from meshplan.orient.stories import SLAB_HORIZONTAL_DEG, slab_faces
+
+    rng = np.random.default_rng(5)
+    heights = rng.uniform(-0.5, 6.0, 50_000)
+    ny = rng.uniform(-1.0, 1.0, 50_000)
+    ny[:100] = np.nan  # degenerate faces' normals
+    stories = (Story(0, 0.0, 2.6, True, -1.0, 2.8), Story(1, 2.9, 5.5, False, 2.8, 7.0))
+    for floors in (True, False):
+        for ceilings in (True, False):
+            near = np.zeros(len(heights), dtype=bool)
+            for s in stories:
+                if floors:
+                    near |= np.abs(heights - s.floor) < 0.1
+                if ceilings and s.ceiling_found:
+                    near |= np.abs(heights - s.ceiling) < 0.1
+            want = (np.abs(ny) >= np.cos(np.radians(SLAB_HORIZONTAL_DEG))) & near
+            got = slab_faces(heights, ny, stories, 0.1, floors=floors, ceilings=ceilings)
+            np.testing.assert_array_equal(got, want)
+            assert got.dtype == bool and (want.any() or not (floors or ceilings))

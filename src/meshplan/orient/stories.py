@@ -69,14 +69,19 @@ def slab_faces(
     """Faces that are floor or ceiling surfaces: within 30 degrees of horizontal and within
     ``tolerance_m`` of a story's floor or ceiling height (the paper's
     ``RemoveCeilingsAndFloors``)."""
-    horizontal = np.abs(normal_y) >= np.cos(np.radians(SLAB_HORIZONTAL_DEG))
-    near = np.zeros(len(heights), dtype=bool)
+    # the heights of the horizontal faces alone are tested (a pass over every face each
+    # otherwise: 0.1 s of the pen-and-ink plan at 3M faces)
+    flat = np.flatnonzero(np.abs(normal_y) >= np.cos(np.radians(SLAB_HORIZONTAL_DEG)))
+    h = heights[flat]
+    near = np.zeros(len(flat), dtype=bool)
     for s in stories:
         if floors:
-            near |= np.abs(heights - s.floor) < tolerance_m
+            near |= np.abs(h - s.floor) < tolerance_m
         if ceilings and s.ceiling_found:
-            near |= np.abs(heights - s.ceiling) < tolerance_m
-    return horizontal & near
+            near |= np.abs(h - s.ceiling) < tolerance_m
+    out = np.zeros(len(heights), dtype=bool)
+    out[flat[near]] = True
+    return out
 
 
 def without_ceiling(heights: FloatArray, normal_y: FloatArray, story: Story, tolerance_m: float) -> np.ndarray:
