@@ -140,25 +140,38 @@ def glb_bytes(mesh: Mesh, annotations: Annotations | None = None, name: str = "s
 
 
 def _glb(parts: list) -> bytes:
-    """The GLB of ``parts`` ``(name, vertices, faces, rgba)``, identical accessors shared."""
+    """The GLB of ``parts`` ``(name, vertices, faces, rgba)``, identical accessors shared.
+
+    The binary chunk is gathered once, from the arrays themselves, in the final join: a
+    3M-face scan's buffers (60 MB) were copied four times and hashed whole to look for a twin
+    (0.1 s per model). Accessors of the same type and size are compared byte for byte, as
+    before: the markers' repeated shapes are still shared."""
     import json
     import struct
 
-    blob = bytearray()
+    pieces: list = []  # the binary chunk: the buffers and their alignment padding, in order
+    size = 0
     views: list[dict] = []
     accessors: list[dict] = []
-    seen: dict[tuple, int] = {}
+    seen: dict[tuple, list[tuple[np.ndarray, int]]] = {}
 
     def accessor(data: np.ndarray, ctype: int, kind: str, extra: dict) -> int:
-        raw = np.ascontiguousarray(data).tobytes()
-        key = (ctype, kind, raw)
-        if key not in seen:
-            blob.extend(b"\0" * (-len(blob) % _ALIGN))
-            views.append({"buffer": 0, "byteOffset": len(blob), "byteLength": len(raw)})
-            blob.extend(raw)
-            accessors.append({"bufferView": len(views) - 1, "componentType": ctype, "count": int(len(data)), "type": kind, **extra})
-            seen[key] = len(accessors) - 1
-        return seen[key]
+        nonlocal size
+        raw = np.ascontiguousarray(data).reshape(-1).view(np.uint8)
+        twins = seen.setdefault((ctype, kind, raw.nbytes), [])
+        for other, index in twins:
+            if np.array_equal(other, raw):
+                return index
+        pad = -size % _ALIGN
+        if pad:
+            pieces.append(b"\0" * pad)
+            size += pad
+        views.append({"buffer": 0, "byteOffset": size, "byteLength": int(raw.nbytes)})
+        pieces.append(raw)
+        size += raw.nbytes
+        accessors.append({"bufferView": len(views) - 1, "componentType": ctype, "count": int(len(data)), "type": kind, **extra})
+        twins.append((raw, len(accessors) - 1))
+        return len(accessors) - 1
 
     meshes, nodes = [], []
     for name, vertices, faces, rgba in parts:
@@ -170,7 +183,10 @@ def _glb(parts: list) -> bytes:
         col = accessor(colour, _UBYTE, "VEC4", {"normalized": True, "max": list(map(int, rgba)), "min": list(map(int, rgba))})
         meshes.append({"name": name, "primitives": [{"attributes": {"POSITION": pos, "COLOR_0": col}, "indices": idx, "mode": 4}]})
         nodes.append({"name": name, "mesh": len(meshes) - 1})
-    blob.extend(b"\0" * (-len(blob) % _ALIGN))
+    pad = -size % _ALIGN
+    if pad:
+        pieces.append(b"\0" * pad)
+        size += pad
     doc = {
         "asset": {"version": "2.0", "generator": "meshplan"},
         "scene": 0,
@@ -179,14 +195,12 @@ def _glb(parts: list) -> bytes:
         "meshes": meshes,
         "accessors": accessors,
         "bufferViews": views,
-        "buffers": [{"byteLength": len(blob)}],
+        "buffers": [{"byteLength": size}],
     }
     chunk = json.dumps(doc, separators=(",", ":")).encode("utf-8")
     chunk += b" " * (-len(chunk) % _ALIGN)  # chunks are 4-byte aligned, JSON padded with spaces
-    total = 12 + 8 + len(chunk) + 8 + len(blob)
-    return b"".join(
-        [struct.pack("<4sII", b"glTF", 2, total), struct.pack("<I4s", len(chunk), b"JSON"), chunk, struct.pack("<I4s", len(blob), b"BIN\0"), bytes(blob)]
-    )
+    total = 12 + 8 + len(chunk) + 8 + size
+    return b"".join([struct.pack("<4sII", b"glTF", 2, total), struct.pack("<I4s", len(chunk), b"JSON"), chunk, struct.pack("<I4s", size, b"BIN\0"), *pieces])
 
 
 def empty_glb() -> bytes:
