@@ -227,3 +227,33 @@ def test_files_are_written_and_open(tmp_path):
     top = doc["stories"][0]["ceiling"]
     assert story.bounds[1][1] < top + 0.2
     assert len(result.rooms) == len(doc["rooms"]) > 0
+
+
+def test_a_glb_holds_the_scan_and_shares_the_markers_repeated_shapes():
+    """export.glb writes the binary chunk from the arrays themselves: the scan comes back as it
+    was (float32 positions), and accessors equal byte for byte are written once (every marker's
+    sphere has the same triangles), whatever their order."""
+    import io
+    import json
+    import struct
+
+    import trimesh
+
+    from meshplan.export.glb import glb_bytes
+    from meshplan.geometry import Annotations, Mesh
+
+    rng = np.random.default_rng(2)
+    v = rng.normal(size=(5000, 3))
+    f = rng.integers(0, len(v), size=(9000, 3))
+    ann = Annotations(("t1", "s1", "s2"), ("thermostat", "sensor", "sensor"), rng.normal(size=(3, 3)), np.eye(3))
+    data = glb_bytes(Mesh(v, f), ann, "scan")
+    (length,) = struct.unpack("<I", data[12:16])
+    doc = json.loads(data[20 : 20 + length])
+    assert len(data) % 4 == 0 and struct.unpack("<I", data[8:12])[0] == len(data)
+    indices = [m["primitives"][0]["indices"] for m in doc["meshes"]]
+    assert len(indices) == 4 and len(set(indices[1:])) == 1 and indices[0] != indices[1]  # the markers share theirs
+    assert all(view["byteOffset"] % 4 == 0 for view in doc["bufferViews"])
+    scene = trimesh.load(io.BytesIO(data), file_type="glb", process=False)
+    scan = scene.geometry["scan"]
+    np.testing.assert_array_equal(scan.faces, f)
+    np.testing.assert_array_equal(scan.vertices, v.astype(np.float32))
