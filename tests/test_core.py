@@ -280,27 +280,19 @@ def test_slicing_gives_the_former_segments_bit_for_bit(kind):
 
 
 @pytest.mark.parametrize("kind", ["grid", "noise"])
-def test_slicing_the_faces_a_plane_cuts_gives_the_slice_of_all(kind):
-    """slice_faces gathers only the faces the plane cuts: the same segments, in the same order,
-    as slicing every selected face, corners exactly on the plane included (the grid)."""
-    from meshplan.slicing import slice_faces
-
+def test_slicing_selected_faces_in_place_gives_the_slice_of_their_copy(kind):
+    """slice_mesh(select=) reads the selected faces in place (their heights, and the corners of
+    those a plane cuts): the same segments, in the same order, faces and levels, as slicing a
+    copy of them, corners exactly on the plane included (the grid), one plane or many."""
     rng = np.random.default_rng(1)
     tri = rng.integers(0, 6, size=(20_000, 3, 3)) * 0.5 if kind == "grid" else rng.normal(size=(20_000, 3, 3))
     faces = np.sort(rng.choice(len(tri), size=12_000, replace=False))
-    for height in (0.5, 1.0, 0.25, -3.0):
-        whole = slice_mesh(tri[faces], [height])
-        s = slice_faces(tri, faces, height)
-        assert len(s.segments) == len(whole.segments) and (height == -3.0 or len(s.segments) > 100)
-        np.testing.assert_array_equal(s.segments, whole.segments)
-        np.testing.assert_array_equal(s.face, whole.face)
-        np.testing.assert_array_equal(s.level, whole.level)
-    # every plane at once, the selected faces read in place (slice_mesh's select)
-    h = np.arange(-1.0, 2.51, 0.25)
-    whole, s = slice_mesh(tri[faces], h), slice_mesh(tri, h, faces)
-    assert len(whole.segments) > 1000
-    for a, b in ((s.segments, whole.segments), (s.face, whole.face), (s.level, whole.level)):
-        np.testing.assert_array_equal(a, b)
+    for h in ([0.5], [1.0], [0.25], [-3.0], np.arange(-1.0, 2.51, 0.25)):
+        whole, s = slice_mesh(tri[faces], h), slice_mesh(tri, h, faces)
+        assert len(s.segments) == len(whole.segments) and (h[0] == -3.0 or len(s.segments) > 100)
+        for a, b in ((s.segments, whole.segments), (s.face, whole.face), (s.level, whole.level)):
+            np.testing.assert_array_equal(a, b)
+    assert not len(slice_mesh(tri, [0.5], np.zeros(0, np.int64)).segments)
 
 
 def test_slicing_an_edge_on_a_plane_gives_it_once_from_the_triangle_below():

@@ -312,6 +312,17 @@ def _round_list(a: ArrayLike, ndigits: int) -> list:
 # Rigid transforms
 
 
+def max3(a: FloatArray) -> FloatArray:
+    """``a.max(axis=1)`` of an ``(n, 3)`` array (a triangle's three corners' heights, say), the
+    same numbers: numpy's reduction over a short last axis is several times slower."""
+    return np.maximum(np.maximum(a[:, 0], a[:, 1]), a[:, 2])
+
+
+def min3(a: FloatArray) -> FloatArray:
+    """``a.min(axis=1)`` of an ``(n, 3)`` array, the same numbers (see :func:`max3`)."""
+    return np.minimum(np.minimum(a[:, 0], a[:, 1]), a[:, 2])
+
+
 def homogeneous(rotation: ArrayLike | None = None, translation: ArrayLike | None = None) -> FloatArray:
     """A 4x4 matrix from a 3x3 rotation and a translation."""
     m = np.eye(4)

@@ -26,7 +26,7 @@ from .plan.stairs import attach_rooms, turned_pieces
 from .plan.symbols import plan_symbols
 from .plan.voids import double_height_voids
 from .result import PAPER_FACES, PAPER_TIMINGS_S, STAGES, Oriented, Progress, Result, StoryPlans, _read_only, _Timer
-from .slicing import slice_faces
+from .slicing import slice_mesh
 from .updown import WEAK_SIGN_EVIDENCE, settle_up
 from .updown import up_by_doors as _up_by_doors
 from .updown import up_in_doubt as _up_in_doubt
@@ -249,7 +249,7 @@ def _compute(
                     drafting=cut,
                     annotations=story_ann,
                     symbols=plan_symbols(story.index, walls, openings, rooms, physical, options.render.imperial, stairs=stairs, elements=elements, voids=voids),
-                    reference=_read_only(slice_faces(plan_mesh.triangles, story_faces, cut.height).segments),
+                    reference=_read_only(slice_mesh(plan_mesh.triangles, np.array([cut.height]), story_faces).segments),
                     model_faces=_read_only(np.flatnonzero(in_story & without_ceiling(heights, normal_y, story, options.orient.slab_tolerance_m))),
                 )
             )

@@ -31,7 +31,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .._version import __version__
-from ..geometry import ANNOTATION_KINDS, ANNOTATION_PROBE_M, Mesh, transform_directions, transform_points
+from ..geometry import ANNOTATION_KINDS, ANNOTATION_PROBE_M, Mesh, max3, min3, transform_directions, transform_points
 from .glb import KIND_RGBA, MESH_RGBA, WALL_RGBA, submesh
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -239,8 +239,7 @@ def _one_a_triple(c: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
     """Of faces on the same three cells (``c``, ``(m, 3)`` of ``n`` cells), the first: their
     indices, in order; and for each, whether as many faces of its triple ran one way as the
     other (the two sides of a part thinner than a cell, or a fold)."""
-    lo = np.minimum(np.minimum(c[:, 0], c[:, 1]), c[:, 2])
-    hi = np.maximum(np.maximum(c[:, 0], c[:, 1]), c[:, 2])
+    lo, hi = min3(c), max3(c)
     mid = c.sum(axis=1) - lo - hi
     if n < 2**21:  # the three cells, in order, as one int64
         order = np.argsort((lo * n + mid) * n + hi, kind="stable")

@@ -52,7 +52,7 @@ import numpy as np
 from scipy import ndimage
 
 from .._kernels import max_corner_distance, sample_faces, scatter_max, scatter_min
-from ..geometry import FloatArray, IntArray, Mesh
+from ..geometry import FloatArray, IntArray, Mesh, max3, min3
 from ..walls import FlatWalls
 from ..walls.flat import AJAR_MIN_TURN_DEG
 from .params import PlanParams
@@ -422,8 +422,8 @@ class WallEvidence:
             y = self.tri[:, :, 1]
             ymin = np.full(k, np.inf)
             ymax = np.full(k, -np.inf)
-            scatter_min(ymin, flab, _min3(y))
-            scatter_max(ymax, flab, _max3(y))
+            scatter_min(ymin, flab, min3(y))
+            scatter_max(ymax, flab, max3(y))
             shortest = min(self.params.door_height_m, self.params.window_height_m)
             tall = (counts <= PANEL_MAX_FACES) & (ymax - ymin >= shortest - EDGE_CELLS * self.params.opening_cell_m)
             sel = np.flatnonzero(tall[flab])
@@ -463,17 +463,6 @@ def _samples(tri: FloatArray, cell: float) -> FloatArray:
     if not len(tri):
         return np.zeros((0, 3))
     return sample_faces(np.ascontiguousarray(tri, dtype=np.float64), MAX_SAMPLED_EDGE_M, 0.7 * cell)
-
-
-def _max3(a: FloatArray) -> FloatArray:
-    """``a.max(axis=1)`` of an ``(n, 3)`` array, the same numbers (numpy's reduction over a
-    short last axis is several times slower)."""
-    return np.maximum(np.maximum(a[:, 0], a[:, 1]), a[:, 2])
-
-
-def _min3(a: FloatArray) -> FloatArray:
-    """``a.min(axis=1)`` of an ``(n, 3)`` array, the same numbers."""
-    return np.minimum(np.minimum(a[:, 0], a[:, 1]), a[:, 2])
 
 
 def _straight(box: np.ndarray, tolerance: int, share: float) -> bool:
@@ -564,9 +553,9 @@ def _gaps(ev: WallEvidence, w: int, floor: float, ceiling: float) -> list[Candid
     u = tv @ t3
     y = tv[:, :, 1]
     keep = (
-        (_max3(d) >= far) & (_min3(d) <= near)
-        & (_max3(u) >= lo) & (_min3(u) <= hi)
-        & (_max3(y) >= floor) & (_min3(y) <= ceiling)
+        (max3(d) >= far) & (min3(d) <= near)
+        & (max3(u) >= lo) & (min3(u) <= hi)
+        & (max3(y) >= floor) & (min3(y) <= ceiling)
     )
     tri = tv[keep]
     if not len(tri):
@@ -722,7 +711,7 @@ def _gaps(ev: WallEvidence, w: int, floor: float, ceiling: float) -> list[Candid
     # windows whose glazing was scanned, set back in a reveal: holes in the face's own plane
     # over a surface behind it that faces the room (the wall's far face faces away)
     room = ev.normals[cand][keep] @ n3 > ev.cos
-    back = tri[room & (_max3(tri @ n3 - off) < -RECESS_MIN_M)]
+    back = tri[room & (max3(tri @ n3 - off) < -RECESS_MIN_M)]
     if len(back):
         face = raster(at, near, -RECESS_MIN_M)
         recess = ndimage.binary_closing(raster(cells(_samples(back, cell)), -RECESS_MIN_M, far), structure=np.ones((2, 2))) & ~face
@@ -797,12 +786,12 @@ def _reveal(
     tri = ev.tri[faces]
     d, y = tri @ n3 - off, tri[:, :, 1]
     cu = ev.centroids[faces] @ t3
-    ok = (_max3(d) >= d_range[0]) & (_min3(d) <= d_range[1]) & (np.abs(cu - u) <= reach)
-    ok &= (_max3(y) >= low) & (_min3(y) <= high)
+    ok = (max3(d) >= d_range[0]) & (min3(d) <= d_range[1]) & (np.abs(cu - u) <= reach)
+    ok &= (max3(y) >= low) & (min3(y) <= high)
     if not ok.any():
         return 0.0, float("nan")
-    a = np.clip(np.floor((_min3(y[ok]) - low) / cell).astype(np.int64), 0, nrow)
-    b = np.clip(np.ceil((_max3(y[ok]) - low) / cell).astype(np.int64), 0, nrow)
+    a = np.clip(np.floor((min3(y[ok]) - low) / cell).astype(np.int64), 0, nrow)
+    b = np.clip(np.ceil((max3(y[ok]) - low) / cell).astype(np.int64), 0, nrow)
     diff = np.zeros(nrow + 1, np.int64)
     np.add.at(diff, a, 1)
     np.add.at(diff, b, -1)
@@ -1473,12 +1462,12 @@ def _floor_beyond(
         return out
     tri = ev.tri[f]
     d = tri @ n3 - off
-    f_ok = (np.abs(ev.centroids[f, 1] - floor) <= FLOOR_BAND_M) & (_max3(d) >= -FLOOR_BEYOND_M) & (_min3(d) <= -params.opening_slab_m)
+    f_ok = (np.abs(ev.centroids[f, 1] - floor) <= FLOOR_BAND_M) & (max3(d) >= -FLOOR_BEYOND_M) & (min3(d) <= -params.opening_slab_m)
     if not np.any(f_ok):
         return out
     u = tri[f_ok] @ t3
-    a = np.clip(np.floor((_min3(u) - lo) / cell).astype(np.int64), 0, ncol)
-    b = np.clip(np.ceil((_max3(u) - lo) / cell).astype(np.int64), 0, ncol)
+    a = np.clip(np.floor((min3(u) - lo) / cell).astype(np.int64), 0, ncol)
+    b = np.clip(np.ceil((max3(u) - lo) / cell).astype(np.int64), 0, ncol)
     # columns covered by a floor triangle: a difference array over the triangles' spans
     diff = np.zeros(ncol + 1, np.int64)
     np.add.at(diff, a, 1)
@@ -1504,9 +1493,9 @@ def _panels(ev: WallEvidence, w: int, floor: float, ceiling: float) -> list[Cand
     u = (tri @ t3).reshape(len(faces), 3)
     y = tri[:, :, 1]
     seg = starts[:-1]
-    dmin, dmax = np.minimum.reduceat(_min3(d), seg), np.maximum.reduceat(_max3(d), seg)
-    umin, umax = np.minimum.reduceat(_min3(u), seg), np.maximum.reduceat(_max3(u), seg)
-    ymin, ymax = np.minimum.reduceat(_min3(y), seg), np.maximum.reduceat(_max3(y), seg)
+    dmin, dmax = np.minimum.reduceat(min3(d), seg), np.maximum.reduceat(max3(d), seg)
+    umin, umax = np.minimum.reduceat(min3(u), seg), np.maximum.reduceat(max3(u), seg)
+    ymin, ymax = np.minimum.reduceat(min3(y), seg), np.maximum.reduceat(max3(y), seg)
     width = umax - umin
     in_slab = (dmin >= far) & (dmax <= near) & (umin >= walls.u_min[w] - tol) & (umax <= walls.u_max[w] + tol)
     doors = (

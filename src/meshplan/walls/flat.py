@@ -38,7 +38,7 @@ import numpy as np
 from scipy.special import fdtri, stdtrit  # F and Student t quantiles, without importing scipy.stats (0.4 s)
 
 from .._kernels import centroids_areas, scatter_max, scatter_min
-from ..geometry import FloatArray, IntArray, Mesh
+from ..geometry import FloatArray, IntArray, Mesh, max3
 from ..orient import Orientation
 from .boxdbscan import box_dbscan
 from .evidence import (
@@ -1335,7 +1335,7 @@ def _walls_short_of(tri: FloatArray, normals: FloatArray, floor: float, ceiling:
     t = tri[vertical]
     area = 0.5 * np.linalg.norm(np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]), axis=1)
     y = t[:, :, 1]
-    top = np.maximum(np.maximum(y[:, 0], y[:, 1]), y[:, 2])  # y.max(axis=1), the same numbers, faster
+    top = max3(y)
     high = top > ceiling - WALLS_SHORT_M
     above = top > floor + WALLS_SHORT_M  # the walls, not the skirting
     total = float(area[above].sum())
