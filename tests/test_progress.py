@@ -155,3 +155,31 @@ def test_progress_per_stage_on_a_terminal(scan, tmp_path):
     assert "DEBUG meshplan: stage orient" in text
     assert not re.search(r"\d:\d\d:\d\dDEBUG", text), text
     assert "Traceback" not in text
+
+
+def test_the_display_starts_after_the_drawing_workers_are_forked(scan, tmp_path, monkeypatch):
+    """The live display redraws itself from a thread of its own: a drawing worker forked while
+    that thread held the console's or stderr's lock would wait for it for ever the first time it
+    printed. The run forks its workers before its first stage, and the display starts there."""
+    import threading
+
+    import meshplan
+    from meshplan import export
+    from meshplan.progress import StageProgress
+
+    threads_at_fork: list[int] = []
+    real = export.RenderPool.__init__
+
+    def spy(self, processes):
+        threads_at_fork.append(threading.active_count())
+        real(self, processes)
+
+    monkeypatch.setattr(export.RenderPool, "__init__", spy)
+    monkeypatch.setattr(sys.stderr, "isatty", lambda: True, raising=False)
+    alone = threading.active_count()
+    with StageProgress() as display:
+        assert display.enabled
+        assert threading.active_count() == alone  # nothing shown before the run's first stage
+        meshplan.run(scan, output=tmp_path / "out", progress=display.update, processes=2)
+        assert threading.active_count() > alone  # then the display is live, with its thread
+    assert threads_at_fork == [alone]

@@ -242,3 +242,53 @@ def test_workers_draw_at_the_runs_priority_where_allowed():
         assert pool.executor is not None
         got = {pool.executor.submit(_priority).result(timeout=60) for _ in range(4)}
     assert got == ({mine} if may_raise else {min(mine + _WARM_UP_NICE, 19)})
+
+
+def _spin(seconds: float) -> dict[str, bytes]:
+    """A drawing job that works (uses CPU) for ``seconds``."""
+    end = time.process_time() + seconds
+    while time.process_time() < end:
+        pass
+    return {"spun": b"%d" % os.getpid()}
+
+
+@pytest.mark.timeout(180)  # waiting for ever is what is tested: fail soon, not at the suite's limit
+def test_a_stuck_worker_is_killed_and_its_drawings_made_here(apartment, monkeypatch):
+    """A worker that uses no CPU while the run waits for its drawings never answers (stopped
+    here; in a library caller's process, one forked while another thread held a lock it needs
+    waits forever, and the run with it): after ``WORKER_STALL_S`` the run kills its workers and
+    draws here, the same files byte for byte."""
+    import meshplan
+    from meshplan import export
+    from meshplan.export import RenderPool, render_files
+
+    result = meshplan.run(apartment)
+    with RenderPool(1) as alone:
+        here = render_files(result, pool=alone)
+    monkeypatch.setattr(export, "WORKER_STALL_S", 1.0)
+    with RenderPool(2) as pool:
+        pids = list(pool.executor._processes)
+        for pid in pids:
+            os.kill(pid, signal.SIGSTOP)
+        there = render_files(result, pool=pool)
+        assert pool.stuck
+        assert not any(_alive(p) for p in pids), "the stuck workers were not killed"
+    assert sorted(here) == sorted(there)
+    for name in here:
+        if name != "report.html":  # shows the run's timings
+            assert here[name] == there[name], name
+
+
+def test_a_worker_at_work_is_waited_for_however_long(monkeypatch):
+    """Only a worker that uses no CPU is taken for stuck: one drawing for longer than
+    ``WORKER_STALL_S`` is waited for, and its files come from it."""
+    from meshplan import export
+    from meshplan.export import RenderPool, _result, _submit
+
+    monkeypatch.setattr(export, "WORKER_STALL_S", 0.5)
+    with RenderPool(2) as pool:
+        (worker,) = pool.executor._processes
+        job = (_spin, 2.0)
+        (future,) = _submit(pool, [job])
+        assert _result(job, future, pool) == {"spun": b"%d" % worker}
+        assert not pool.stuck

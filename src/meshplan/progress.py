@@ -61,23 +61,30 @@ class StageProgress:
         self._stack = contextlib.ExitStack()
 
     def __enter__(self) -> StageProgress:
-        if self.enabled:
-            from rich.console import Console
-            from rich.progress import Progress, SpinnerColumn, TextColumn
-
-            self._progress = Progress(
-                SpinnerColumn(), TextColumn("{task.description}"), _StageTimeColumn(), console=Console(stderr=True), transient=False
-            )
-            self._stack.enter_context(self._progress)
-            self._stack.enter_context(logs_above_live_display())
         return self
 
     def __exit__(self, *exc: Any) -> None:
         self._stack.__exit__(*exc)
 
+    def _start(self) -> None:
+        """Show the display, at the run's first stage. Not before: the live display redraws
+        itself from a thread of its own, and the run forks its drawing workers as it starts
+        (:class:`meshplan.export.RenderPool`); a worker forked while that thread held the
+        console's or stderr's lock would wait for it for ever the first time it printed."""
+        from rich.console import Console
+        from rich.progress import Progress, SpinnerColumn, TextColumn
+
+        self._progress = Progress(
+            SpinnerColumn(), TextColumn("{task.description}"), _StageTimeColumn(), console=Console(stderr=True), transient=False
+        )
+        self._stack.enter_context(self._progress)
+        self._stack.enter_context(logs_above_live_display())
+
     def update(self, stage: str, event: str) -> None:
-        if self._progress is None:
+        if not self.enabled:
             return
+        if self._progress is None:
+            self._start()
         task = self._tasks.get(stage)
         if task is None:
             self._tasks[stage] = self._progress.add_task(STAGE_NAMES.get(stage, stage), total=1, before_s=0.0)

@@ -379,6 +379,9 @@ class RenderPool:
 
     def __init__(self, processes: int) -> None:
         self.executor = None
+        #: whether the workers were found stuck and killed (:func:`_result`): the jobs left are
+        #: drawn here
+        self.stuck = False
         self.workers = max(0, int(processes) - 1) if sys.platform.startswith("linux") else 0
         if self.workers:
             import multiprocessing
@@ -442,16 +445,68 @@ def _submit(pool: RenderPool, jobs: list[tuple]) -> list:
         return [None] * len(jobs)
 
 
-def _result(job: tuple, future) -> dict[str, bytes]:
-    """The files of ``job``: from its worker, or made here when it has none or its worker died
-    (the files are the same either way)."""
+#: How long (s) the run waits for a drawing while its workers use no CPU at all before it takes
+#: them for stuck, kills them and draws here. A drawing worker at work always uses CPU (it
+#: draws, or reads its job from the pipe); one that uses none while the run waits will never
+#: answer: stopped by a signal, or forked while another thread of the run's process held a lock
+#: the worker then needs (a library caller's threads: the command forks before it starts any),
+#: which waits forever. Minutes would be as right; this is long beside any pause of a worker on
+#: a loaded machine (a worker at nice 10 among 20 busy processes on 2 cores still gets 1 %).
+WORKER_STALL_S = 30.0
+#: How often (s) the waiting run looks at its workers' CPU time (``/proc/<pid>/stat``).
+_STALL_POLL_S = 0.25
+
+
+def _cpu_ticks(pids) -> int:
+    """The CPU time (user + system, in clock ticks) the processes ``pids`` have used, those
+    gone counting for nothing."""
+    total = 0
+    for pid in pids:
+        try:
+            fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+            total += int(fields[11]) + int(fields[12])  # utime, stime (proc(5): fields 14, 15)
+        except (OSError, IndexError, ValueError):  # gone, or no /proc
+            pass
+    return total
+
+
+def _wait(pool: RenderPool, future):
+    """``future``'s result, or :class:`TimeoutError` once ``pool``'s workers have used no CPU
+    for :data:`WORKER_STALL_S` while it was awaited."""
+    from concurrent.futures import TimeoutError as FutureTimeout
+
+    pids = list(dict(getattr(pool.executor, "_processes", None) or {}))
+    ticks, since = _cpu_ticks(pids), time.monotonic()
+    while True:
+        try:
+            return future.result(timeout=_STALL_POLL_S)
+        except FutureTimeout:
+            now, used = time.monotonic(), _cpu_ticks(pids)
+            if used != ticks:
+                ticks, since = used, now
+            elif now - since >= WORKER_STALL_S:
+                raise TimeoutError from None
+
+
+def _result(job: tuple, future, pool: RenderPool) -> dict[str, bytes]:
+    """The files of ``job``: from ``pool``'s worker, or made here when it has none, its worker
+    died or is stuck (:data:`WORKER_STALL_S`; the workers are then killed). The files are the
+    same either way."""
+    from concurrent.futures import CancelledError
     from concurrent.futures.process import BrokenProcessPool
 
-    if future is not None:
+    if future is not None and (future.done() or not pool.stuck):
         try:
-            return future.result()
+            return _wait(pool, future)
         except BrokenProcessPool:
-            log.warning("a drawing worker died; drawing in the main process instead")
+            if not pool.stuck:
+                log.warning("a drawing worker died; drawing in the main process instead")
+        except CancelledError:  # cancelled by the pool's shutdown after it was stuck
+            pass
+        except TimeoutError:
+            log.warning("the drawing workers used no CPU for %.0f s: stuck; drawing in the main process instead", WORKER_STALL_S)
+            pool.stuck = True
+            pool.terminate()
     return _call(job)
 
 
@@ -569,7 +624,7 @@ def render_files(result: Result, timer: _Timer | None = None, pool: RenderPool |
                 files.update(_undrawn_files(result, dxf))
                 page = report_page(result)
             for job, future in zip(drawings, pending):
-                files.update(_result(job, future))
+                files.update(_result(job, future, pool))
         with stage("write"):
             if not parallel:
                 files.update(_undrawn_files(result, dxf))
