@@ -25,22 +25,17 @@ from enum import Enum
 from pathlib import Path
 from typing import Any, Optional
 
-
-def _interrupted_while_starting(signum: int, frame: Any) -> None:
-    """Ctrl-C while this module loads (typer, and the options' defaults, which import numpy and
-    scipy: about a second), before :func:`main` can catch it: the same one line, no traceback."""
-    sys.stderr.write("error: interrupted; nothing was written\n")
-    sys.stderr.flush()
-    os._exit(130)
-
-
 #: Loading as the ``meshplan`` program (the console script or ``python -m meshplan``).
 _PROGRAM = bool(sys.argv[:1]) and (Path(sys.argv[0]).name == "meshplan" or Path(sys.argv[0]).parts[-2:] == ("meshplan", "__main__.py"))
 #: ... with Python's own Ctrl-C handler; a library importing this module keeps its handler, and
 #: a program started with Ctrl-C ignored (``nohup``, a shell's background job) keeps ignoring it.
 _STARTING = _PROGRAM and threading.current_thread() is threading.main_thread() and signal.getsignal(signal.SIGINT) is signal.default_int_handler
 if _STARTING:
-    signal.signal(signal.SIGINT, _interrupted_while_starting)
+    # Ctrl-C while this module loads (typer, and the options' defaults, which import numpy and
+    # scipy: about a second), before main() can catch it: the same one line, no traceback
+    from ._ctrl_c import exit_at_once
+
+    signal.signal(signal.SIGINT, exit_at_once)
 if _PROGRAM:
     from ._memory import keep_freed_memory, small_pages
 
@@ -305,8 +300,11 @@ def run(
     **options: Any,
 ) -> None:
     """Orient a scan, split it into stories and draw its floor plans."""
-    from . import api
+    from ._ctrl_c import exit_at_once_from_now
 
+    if _STARTING:  # the program: Ctrl-C ends the run at once until it writes (meshplan._ctrl_c)
+        exit_at_once_from_now()
+    from . import api
     _setup_logging(verbose, quiet)
     params = _run_keywords(options)
     out = output if output is not None else api.default_output_dir(scan)

@@ -28,6 +28,7 @@ import tempfile
 from collections.abc import Iterable, Iterator
 from pathlib import Path
 
+from .._ctrl_c import raise_from_now
 from ..errors import OutputError
 
 _TMP_TAG = ".meshplan-tmp-"
@@ -304,6 +305,9 @@ def staged_directory(
     ``kind`` and ``protect`` are those of :func:`check_output_dir`.
     """
     t = check_output_dir(target, force, kind=kind, protect=protect)
+    # from here Ctrl-C cleans up what was created (the program exited at once until now: see
+    # meshplan._ctrl_c)
+    raise_from_now()
     created: list[Path] = []
     try:
         _make_parents(t.parent, created)
