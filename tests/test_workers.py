@@ -154,8 +154,8 @@ def test_ctrl_c_is_one_line(apartment, tmp_path):
     # row in one full make test, once in CI before), or crashed with SIGSEGV and nothing on
     # stderr: the KeyboardInterrupt landed in a library's import (swallowed, or a compiled
     # module's initialization left half done). The run now exits at once until it writes
-    # (meshplan._ctrl_c; test below): 14 of 14 under load against 6 of 8 before. The second try
-    # stays: a Ctrl-C that is ignored fails both.
+    # (meshplan._ctrl_c; test below): 14 of 14 right under load, against 6 of 8 before (a crash,
+    # an internal error). The second try stays: a Ctrl-C that is ignored fails both.
     for attempt in range(2):
         out = tmp_path / f"out{attempt}"
         code, text, survivors = _interrupt(apartment, out)
