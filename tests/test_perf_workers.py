@@ -77,3 +77,59 @@ def test_each_storys_sheet_is_made_once_per_run(tmp_path, monkeypatch):
     assert len(result.orientation.stories) == 2
     assert len(made) == 2
     assert {f"drafting-{i}.png" for i in (0, 1)} <= set(result.files)
+
+
+@pytest.mark.parametrize("processes", [1, 2])
+def test_models_and_view_made_ahead_are_the_runs_files(tmp_path, monkeypatch, processes):
+    """From AHEAD_MIN_FACES faces the GLB models and the report's view of the scan are made in a
+    thread once the walls and openings are final: every file is the same, byte for byte (the
+    timings aside), and the run does not make them again."""
+    import json
+    import re
+
+    import meshplan
+    from meshplan import export
+    from meshplan.export.synth import write_synthetic
+    from meshplan.synthetic import SynthParams, generate
+
+    scan = write_synthetic(generate(SynthParams(preset="multistory", seed=1, target_faces=20_000)), tmp_path / "scan", "ply")
+    notes = scan.parent / "annotations.json"  # the sensors: in every model, each on its story's
+    assert notes.exists()
+    meshplan.run(scan, annotations=notes, output=tmp_path / "after", processes=processes)
+    monkeypatch.setattr(export, "AHEAD_MIN_FACES", 0)
+    models = export._model_jobs
+
+    def not_again(result):
+        raise AssertionError("the models were made again after the rooms")
+
+    monkeypatch.setattr(export, "_model_jobs", not_again)
+    meshplan.run(scan, annotations=notes, output=tmp_path / "ahead", processes=processes)
+    monkeypatch.setattr(export, "_model_jobs", models)
+    after, ahead = tmp_path / "after", tmp_path / "ahead"
+    names = sorted(p.name for p in after.iterdir())
+    assert names == sorted(p.name for p in ahead.iterdir()) and {"oriented.glb", "story-1.glb", "flat-walls-0.glb"} <= set(names)
+    for name in names:
+        if name not in ("plan.json", "report.html"):
+            assert (after / name).read_bytes() == (ahead / name).read_bytes(), name
+    docs = [json.loads((d / "plan.json").read_text()) for d in (after, ahead)]
+    assert [{k: v for k, v in d.items() if k != "timings"} for d in docs] == [{k: v for k, v in docs[1].items() if k != "timings"}] * 2
+    # the report's 3D view is the same (its timings table aside)
+    views = [re.search(r'id="meshplan-data">(.*?)</script>', (d / "report.html").read_text(), re.S) for d in (after, ahead)]
+    assert views[0] is not None and views[1] is not None
+    assert json.loads(views[0].group(1))["meshes"] and views[0].group(1) == views[1].group(1)
+
+
+def test_models_made_ahead_of_another_mesh_are_not_taken(computed):
+    """A run whose rooms stage turned part of the mesh over (a stair's upper flight) has
+    another mesh than the one its models were begun from: they are made again from it."""
+    from dataclasses import replace
+
+    from meshplan.export import Ahead, _oriented_of
+    from meshplan.export.view3d import MAX_FACES
+
+    _, result = computed("apartment", 1)
+    ahead = Ahead(_oriented_of(result), result.walls, result.openings, result.options.orient.slab_tolerance_m, MAX_FACES)
+    made = ahead.take(result)
+    assert made is not None and {"oriented.glb", "story-0.glb", "flat-walls-0.glb"} <= set(made[0])
+    assert ahead.take(replace(result, mesh=result.mesh.with_flipped(result.mesh.face_normals[:, 1] > 0.9))) is None
+    assert ahead.take(replace(result, openings=replace(result.openings))) is None
