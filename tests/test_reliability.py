@@ -278,7 +278,7 @@ def test_a_failure_while_drawing_or_writing_leaves_nothing(tmp_path, good, capsy
         "interrupt": (130, ("interrupted", "nothing was written")),
     }[failure]
 
-    def render(result, timer=None, pool=None, early=None, ahead=None):
+    def render(result, timer=None, pool=None, early=None):
         if failure == "render bug":
             raise RuntimeError("boom")
         if failure == "render memory":
@@ -329,7 +329,7 @@ from meshplan.api import run
 scan, out = sys.argv[1], pathlib.Path(sys.argv[2])
 old, new = run(scan, slices=10), run(scan, slices=37)
 rendered = {id(old): export.render_files(old), id(new): export.render_files(new)}
-export.render_files = lambda result, timer=None, pool=None, early=None, ahead=None: dict(rendered[id(result)])
+export.render_files = lambda result, timer=None, pool=None, early=None: dict(rendered[id(result)])
 
 
 def tree(d):

@@ -16,7 +16,7 @@ from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from .export import RenderPool, _processes, begin_ahead, submit_early, submit_upright, submit_walls, write_results
+from .export import RenderPool, _processes, submit_early, submit_upright, submit_walls, write_results
 from .geometry import Annotations, Mesh
 from .io import check_output_dir, load_annotations, load_mesh
 from .options import RunOptions
@@ -26,7 +26,6 @@ from .result import Oriented, Progress, Result, _Timer
 
 if TYPE_CHECKING:  # pragma: no cover
     from .orient import Orientation
-    from .plan.openings import Openings
     from .walls import FlatWalls
 
 log = logging.getLogger(__name__)
@@ -119,11 +118,9 @@ def run(
             handed["oriented"] = oriented
             handed["early"] = submit_early(pool, oriented, handed.get("early"))
 
-        def draw_walls(walls: FlatWalls, openings: Openings) -> None:
+        def draw_walls(walls: FlatWalls) -> None:
             if "oriented" in handed:
                 handed["early"] = submit_walls(pool, handed["oriented"], walls, handed["early"])
-                if output is not None:  # the models and the report's view, begun beside the rooms
-                    handed["ahead"] = begin_ahead(handed["oriented"], walls, openings)
 
         result = compute(
             loaded.mesh, loaded.stats, ann, options, timer, units_explicit=explicit, room_edits=edits,
@@ -133,7 +130,5 @@ def run(
             result = replace(result, warnings=(*loaded.warnings, *result.warnings))
         if output is None:
             return replace(result, timings={**timer.timings, "total": time.perf_counter() - t0})
-        written = write_results(
-            result, Path(output), force=force, timer=timer, started=t0, pool=pool, early=handed.get("early"), ahead=handed.get("ahead")
-        )
+        written = write_results(result, Path(output), force=force, timer=timer, started=t0, pool=pool, early=handed.get("early"))
     return replace(result, output_dir=written.output_dir, files=written.files, timings=written.timings)

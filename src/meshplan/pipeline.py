@@ -17,7 +17,7 @@ from .geometry import Annotations, Mesh, few_blas_threads
 from .io import LoadStats
 from .options import RunOptions
 from .orient import assign_faces
-from .orient.stories import model_faces
+from .orient.stories import without_ceiling
 from .plan import drafting, find_openings, find_rooms, find_stairs, pen_and_ink
 from .plan.elements import ModelName, RoomEdit, mark_low_confidence, name_rooms, opening_elements, reveal_thickness, section_names, type_rooms, wall_elements
 from .plan.openings import door_leaves
@@ -35,7 +35,6 @@ from .walls.physical import JOIN_REACH_M, join_walls
 
 if TYPE_CHECKING:  # pragma: no cover
     from .orient import Orientation
-    from .plan.openings import Openings
     from .walls import FlatWalls
 
 log = logging.getLogger(__name__)
@@ -116,7 +115,7 @@ def _oriented(stats: LoadStats, options: RunOptions, orientation, plan_mesh: Mes
             )
         )
         pens.append(pen_and_ink(plan_mesh, orientation, story, options.plan, options.orient.slab_tolerance_m))
-    return Oriented(stats, options, orientation, plan_mesh, tuple(pens), tuple(anns), ann_story, plan_annotations)
+    return Oriented(stats, options, orientation, plan_mesh, tuple(pens), tuple(anns), ann_story)
 
 
 def compute(
@@ -129,7 +128,7 @@ def compute(
     room_edits: tuple[RoomEdit, ...] = (),
     on_oriented: Callable[[Oriented], None] | None = None,
     on_upright: Callable[[Orientation, Mesh], None] | None = None,
-    on_walls: Callable[[FlatWalls, Openings], None] | None = None,
+    on_walls: Callable[[FlatWalls], None] | None = None,
 ) -> Result:
     """Run every computing stage on an already loaded mesh (input coordinates, metres).
 
@@ -144,9 +143,8 @@ def compute(
     computed. ``on_upright`` is called before, as soon as the scan is oriented, with the
     orientation and the plan mesh (the run hands its workers the drawings of the orientation
     alone, the normals and levels, while the pen-and-ink slices are cut), and ``on_walls`` with
-    the flat walls and the openings once they are final (the open doors' leaves taken out),
-    before the rooms are found (the run has its workers draw the wall segments meanwhile, and
-    begins the files that need neither drawing nor rooms).
+    the flat walls once they are final (the open doors' leaves taken out), before the rooms are
+    found (the run has its workers draw the wall segments meanwhile).
 
     The stages run with :data:`meshplan.geometry.BLAS_THREADS` BLAS thread: their products are
     thin, and the drawing workers run beside them on the other cores.
@@ -165,7 +163,7 @@ def _compute(
     room_edits: tuple[RoomEdit, ...],
     on_oriented: Callable[[Oriented], None] | None,
     on_upright: Callable[[Orientation, Mesh], None] | None = None,
-    on_walls: Callable[[FlatWalls, Openings], None] | None = None,
+    on_walls: Callable[[FlatWalls], None] | None = None,
 ) -> Result:
     """:func:`compute` itself, under its BLAS thread limit."""
     from .plausibility import orient_plausibly
@@ -216,7 +214,7 @@ def _compute(
             openings = openings.reindexed(renumbered)
             physical = physical_walls(walls, options.walls.max_wall_thickness_m, options.walls.default_wall_thickness_m)
         if on_walls is not None:
-            on_walls(walls, openings)
+            on_walls(walls)
         rooms = find_rooms(plan_mesh, orientation, walls, options.plan, options.orient.slab_tolerance_m)
         # building elements: walls meeting at their centre lines, rooms numbered and named,
         # what each wall and opening joins, types and confidences
@@ -241,7 +239,8 @@ def _compute(
         plans = []
         heights, normal_y = plan_mesh.face_centroids[:, 1], plan_mesh.face_normals[:, 1]
         for story, pen, story_ann in zip(orientation.stories, oriented.pen_and_ink, oriented.story_annotations, strict=True):
-            story_faces = np.flatnonzero(orientation.face_story == story.index)
+            in_story = orientation.face_story == story.index
+            story_faces = np.flatnonzero(in_story)
             cut = mark_low_confidence(drafting(walls, story, options.plan, openings.holes()), walls, physical, rooms, openings, elements)
             plans.append(
                 StoryPlans(
@@ -251,7 +250,7 @@ def _compute(
                     annotations=story_ann,
                     symbols=plan_symbols(story.index, walls, openings, rooms, physical, options.render.imperial, stairs=stairs, elements=elements, voids=voids),
                     reference=_read_only(slice_mesh(plan_mesh.triangles, np.array([cut.height]), story_faces).segments),
-                    model_faces=_read_only(model_faces(orientation.face_story, heights, normal_y, story, options.orient.slab_tolerance_m)),
+                    model_faces=_read_only(np.flatnonzero(in_story & without_ceiling(heights, normal_y, story, options.orient.slab_tolerance_m))),
                 )
             )
     warnings = list(orientation.warnings) + list(plausibility_warnings)

@@ -60,8 +60,6 @@ class Oriented:
         The annotations on each story (plan frame), in story order.
     annotation_story
         The story index of each of the run's annotations (:attr:`Result.annotation_story`).
-    annotations
-        The run's annotations (plan frame, :attr:`Result.annotations`).
     """
 
     input: LoadStats
@@ -71,7 +69,6 @@ class Oriented:
     pen_and_ink: tuple[PenAndInkPlan, ...]
     story_annotations: tuple[Annotations, ...]
     annotation_story: np.ndarray
-    annotations: Annotations
 
 
 @dataclass(frozen=True, eq=False)

@@ -33,10 +33,9 @@ from .planjson import dumps, plan_document, plan_schema
 from .report import report_html, report_page
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ..geometry import Annotations, IntArray, Mesh
+    from ..geometry import Mesh
     from ..orient import Orientation
     from ..plan import PenAndInkPlan
-    from ..plan.openings import Openings
     from ..render.params import RenderParams
     from ..render.sheet import Sheet
     from ..result import Result, _Timer
@@ -45,11 +44,9 @@ if TYPE_CHECKING:  # pragma: no cover
 log = logging.getLogger(__name__)
 
 __all__ = [
-    "Ahead",
     "EarlyDrawings",
     "RenderPool",
     "Written",
-    "begin_ahead",
     "dumps",
     "plan_document",
     "plan_schema",
@@ -119,82 +116,14 @@ def _oriented_files(vertices, faces, annotations) -> dict[str, bytes]:
 
 def _model_jobs(result: Result) -> list[tuple]:
     """``(function, *arguments)`` of the GLB models: each story's, then the whole scan's."""
-    stories = [(sp.story.index, sp.model_faces, sp.annotations) for sp in result.stories]
-    return _models(result.mesh, result.walls, result.openings, stories, result.annotations)
-
-
-def _models(mesh: Mesh, walls: FlatWalls, openings: Openings, stories: list[tuple[int, IntArray, Annotations]], annotations: Annotations) -> list[tuple]:
-    """:func:`_model_jobs` of a mesh, its walls and openings, and its ``stories`` (index, the
-    faces of its model, its annotations)."""
-    holes = openings.holes()
+    mesh = result.mesh
+    holes = result.openings.holes()
     jobs: list[tuple] = [
-        (_story_model_files, mesh.vertices, mesh.faces, faces, walls.mesh(index, holes), ann, index) for index, faces, ann in stories
+        (_story_model_files, mesh.vertices, mesh.faces, sp.model_faces, result.walls.mesh(sp.story.index, holes), sp.annotations, sp.story.index)
+        for sp in result.stories
     ]
-    jobs.append((_oriented_files, mesh.vertices, mesh.faces, annotations))
+    jobs.append((_oriented_files, mesh.vertices, mesh.faces, result.annotations))
     return jobs
-
-
-#: From this many faces the GLB models and the report's view of the scan are made in a thread
-#: as soon as the walls and openings are final (:class:`Ahead`), beside the rest of the rooms
-#: stage, instead of after it: at 3M faces they are 0.7 s of the run's own work after the rooms
-#: (the drawing worker's drafting plans 0.5 s), and mostly copies and sorts that numpy does
-#: without the GIL. Below, they take a tenth of that, and the rooms stage's many small steps
-#: would wait for the thread as much.
-AHEAD_MIN_FACES = 1_000_000
-
-
-class Ahead:
-    """The GLB models and the report's view of the scan (:func:`~meshplan.export.view3d.scan_views`),
-    made in a thread from the walls and openings handed over as soon as they are final
-    (:func:`begin_ahead`). :meth:`take` gives them for a result made of the same mesh, walls
-    and openings (the rooms stage turns a stair's flight over where the winding repair had:
-    the mesh is then another one, and they are made again)."""
-
-    def __init__(self, oriented: Oriented, walls: FlatWalls, openings: Openings, tolerance_m: float, max_faces: int) -> None:
-        import threading
-
-        self.mesh, self.walls, self.openings = oriented.mesh, walls, openings
-        self.files: dict[str, bytes] = {}
-        self.scans: tuple[list[Mesh], float | None] | None = None
-        self.failed = False
-        self._thread = threading.Thread(target=self._make, args=(oriented, tolerance_m, max_faces), name="meshplan-ahead", daemon=True)
-        self._thread.start()
-
-    def _make(self, oriented: Oriented, tolerance_m: float, max_faces: int) -> None:
-        from ..orient.stories import model_faces
-        from .view3d import scan_views
-
-        try:
-            mesh, o = self.mesh, oriented.orientation
-            heights, normal_y = mesh.face_centroids[:, 1], mesh.face_normals[:, 1]
-            stories = [(s.index, model_faces(o.face_story, heights, normal_y, s, tolerance_m), a) for s, a in zip(o.stories, oriented.story_annotations)]
-            for job in _models(mesh, self.walls, self.openings, stories, oriented.annotations):
-                self.files.update(_call(job))
-            wall_faces = sum(self.walls.mesh(s.index).n_faces for s in o.stories)
-            points = bool(oriented.input.points_read)
-            self.scans = scan_views(mesh, [f for _, f, _ in stories], [i for i, _, _ in stories], wall_faces, points, max_faces)
-        except BaseException:  # made again by the run, which then raises what this did
-            log.debug("the models made ahead failed; the run makes them", exc_info=True)
-            self.failed = True
-
-    def take(self, result: Result) -> tuple[dict[str, bytes], tuple[list[Mesh], float | None]] | None:
-        """The models' files and the view's scan layers for ``result``, once made (``None``
-        when they were made of another mesh, walls or openings, or failed)."""
-        self._thread.join()
-        same = result.mesh is self.mesh and result.walls is self.walls and result.openings is self.openings
-        if self.failed or self.scans is None or not same:
-            return None
-        return self.files, self.scans
-
-
-def begin_ahead(oriented: Oriented, walls: FlatWalls, openings: Openings) -> Ahead | None:
-    """Begin the GLB models and the report's view of the scan of a run writing its files, once
-    its walls and openings are final (:class:`Ahead`; ``None`` below :data:`AHEAD_MIN_FACES`)."""
-    if oriented.mesh.n_faces < AHEAD_MIN_FACES:
-        return None
-    from .view3d import MAX_FACES
-
-    return Ahead(oriented, walls, openings, oriented.options.orient.slab_tolerance_m, MAX_FACES)
 
 
 def _early_jobs(oriented: Oriented, sheets: tuple[Sheet, ...]) -> list[tuple]:
@@ -236,7 +165,7 @@ def _oriented_of(result: Result) -> Oriented:
     """What of ``result`` the oriented scan alone decided (for :func:`_early_jobs`)."""
     pens = tuple(sp.pen_and_ink for sp in result.stories)
     anns = tuple(sp.annotations for sp in result.stories)
-    return Oriented(result.input, result.options, result.orientation, result.mesh, pens, anns, result.annotation_story, result.annotations)
+    return Oriented(result.input, result.options, result.orientation, result.mesh, pens, anns, result.annotation_story)
 
 
 def _title(oriented: Oriented | Result) -> tuple[str, float]:
@@ -601,13 +530,13 @@ def _cad_files(result: Result) -> dict[str, bytes]:
     return files
 
 
-def _undrawn_files(result: Result, dxf: list[tuple], models: dict[str, bytes] | None = None) -> dict[str, bytes]:
+def _undrawn_files(result: Result, dxf: list[tuple]) -> dict[str, bytes]:
     """The files no figure is drawn for, made in this process: the IFC and energy models, the
-    GLB models (``models`` when made already) and the DXF files (the jobs ``dxf``)."""
+    GLB models and the DXF files (the jobs ``dxf``)."""
     files = _cad_files(result)
-    for job in (_model_jobs(result) if models is None else []) + dxf:
+    for job in _model_jobs(result) + dxf:
         files.update(_call(job))
-    return {**files, **(models or {})}
+    return files
 
 
 @dataclass(frozen=True, eq=False)
@@ -655,16 +584,13 @@ def submit_upright(pool: RenderPool | None, orientation: Orientation, mesh: Mesh
     return EarlyDrawings(jobs, _submit(pool, jobs))
 
 
-def render_files(
-    result: Result, timer: _Timer | None = None, pool: RenderPool | None = None, early: EarlyDrawings | None = None, ahead: Ahead | None = None
-) -> dict[str, bytes]:
+def render_files(result: Result, timer: _Timer | None = None, pool: RenderPool | None = None, early: EarlyDrawings | None = None) -> dict[str, bytes]:
     """Every output file except plan.json, as ``name -> bytes``, in a deterministic order.
 
     The drawings are made by the workers of ``pool`` (one is opened here when none is given and
     ``RenderParams.processes`` asks for workers), those of ``early`` already under way; meanwhile
     this process makes the GLB models, the DXF files and what the report needs of the result
-    (none of which draws a figure; the GLB models and the report's view from ``ahead`` when they
-    were begun already). Without workers everything is made here. The drawings count
+    (none of which draws a figure). Without workers everything is made here. The drawings count
     as the paper's slicing-and-drawing time (``slice_draw``: until the last one is in); the rest
     (models, DXF files, report) as ``write``. The stages follow each other, so that their times
     add up to the wall time.
@@ -693,18 +619,15 @@ def render_files(
             drawings = early.jobs + later
             pending = list(early.futures) + _submit(pool, later)
             parallel = any(f is not None for f in pending)
-            made = ahead.take(result) if ahead is not None else None
-            models, scans = made if made is not None else (None, None)
             page = None
             if parallel:  # the workers draw: make here what needs no drawing
-                files.update(_undrawn_files(result, dxf, models))
-                page = report_page(result, scans=scans)
+                files.update(_undrawn_files(result, dxf))
+                page = report_page(result)
             for job, future in zip(drawings, pending):
                 files.update(_result(job, future, pool))
         with stage("write"):
             if not parallel:
-                files.update(_undrawn_files(result, dxf, models))
-                page = report_page(result, scans=scans)
+                files.update(_undrawn_files(result, dxf))
             # last: the report inlines the other files
             files["report.html"] = report_html(result, files, page=page).encode("utf-8")
     return dict(sorted(files.items()))
@@ -738,7 +661,6 @@ def write_results(
     started: float | None = None,
     pool: RenderPool | None = None,
     early: EarlyDrawings | None = None,
-    ahead: Ahead | None = None,
 ) -> Written:
     """Render and write every output of ``result`` into ``outdir`` (atomically), drawing with
     the workers of ``pool`` when given (``early``: the drawings already handed to them).
@@ -746,7 +668,7 @@ def write_results(
     ``result`` is left as it is; the run API makes the final result from what this returns
     (``dataclasses.replace(result, output_dir=..., files=..., timings=...)``).
     """
-    files = render_files(result, timer, pool, early, ahead)
+    files = render_files(result, timer, pool, early)
     t0 = time.perf_counter()
     with staged_directory(outdir, force=force) as tmp:
         for name, data in files.items():

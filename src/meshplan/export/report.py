@@ -39,7 +39,7 @@ import numpy as np
 from markupsafe import Markup
 
 from .._version import __version__
-from ..geometry import ANNOTATION_KINDS, Mesh
+from ..geometry import ANNOTATION_KINDS
 from ..result import PAPER_FACES, PAPER_TIMINGS_S, STAGES
 from .planjson import plan_document
 from .view3d import KIND_PREFIX, MAX_FACES, PROBE_M, SUBSAMPLE_SEED, ViewMesh, ViewMeshes, page_data, simplify_faces, subsample_faces, view_meshes
@@ -283,14 +283,13 @@ def _json_script(obj: Any) -> Markup:
     return Markup(json.dumps(obj, separators=(",", ":"), allow_nan=False).replace("<", "\\u003c"))
 
 
-def report_page(result: Result, *, max_faces: int = MAX_FACES, scans: tuple[list[Mesh], float | None] | None = None) -> dict[str, Any]:
+def report_page(result: Result, *, max_faces: int = MAX_FACES) -> dict[str, Any]:
     """What the page shows that the other files do not hold: the 3D view's data, the tables,
     the bundled scripts (the report's costly part, which :func:`meshplan.export.render_files`
     builds while the drawing workers draw). ``report_html(result, files, page=...)`` fills the
-    page from it. ``scans``: the view's scan layers, when made already
-    (:func:`~meshplan.export.view3d.scan_views`)."""
+    page from it."""
     doc = plan_document(result)
-    view = view_meshes(result, max_faces, scans)
+    view = view_meshes(result, max_faces)
     # the energy model's layers are drawn too, but are no faces of the scan (the note counts those)
     shown = ViewMeshes(view.layers + _energy_layers(result), view.max_faces, view.cell_m)
     if view.cell_m is not None:

@@ -41,7 +41,7 @@ __all__ = [
     "CELL_SEARCH_SAMPLE", "CELL_SEARCH_STEPS", "CELL_SEARCH_TOLERANCE", "FLAP_FACES", "KIND_PREFIX", "MAX_FACES",
     "POSITION_LEVELS", "PROBE_M", "SUBSAMPLE_SEED", "ViewMesh", "ViewMeshes", "ZLIB_LEVEL", "cluster_vertices",
     "decode_faces", "decode_positions", "encode_faces", "first_use_order", "pack_positions", "page_data",
-    "quantize_positions", "scan_views", "simplify_faces", "subsample_faces", "unpack_positions", "view_meshes",
+    "quantize_positions", "simplify_faces", "subsample_faces", "unpack_positions", "view_meshes",
 ]
 
 #: Most faces the 3D view shows; past this the stories are simplified (:func:`simplify_faces`).
@@ -459,7 +459,7 @@ def subsample_faces(areas: np.ndarray, m: int, seed: int = SUBSAMPLE_SEED) -> np
     return np.sort(np.argpartition(keys, m - 1)[:m])
 
 
-def view_meshes(result: Result, max_faces: int = MAX_FACES, scans: tuple[list[Mesh], float | None] | None = None) -> ViewMeshes:
+def view_meshes(result: Result, max_faces: int = MAX_FACES) -> ViewMeshes:
     """The 3D view's layers: each story without its ceiling and its flat walls.
 
     When the stories hold more than ``max_faces`` faces in all (flat walls included), they are
@@ -468,39 +468,27 @@ def view_meshes(result: Result, max_faces: int = MAX_FACES, scans: tuple[list[Me
     did not have; the flat walls (two faces a wall) are always whole. Smaller scans are shown
     exactly. A point cloud's splats (one triangle a point, no vertex shared) are shown as a
     fixed subsample instead, the same fraction of every story's (:func:`subsample_faces`).
-    ``scans``: what :func:`scan_views` gives for this result, when made already.
     """
+    mesh = result.mesh
     walls = [result.walls.mesh(sp.story.index) for sp in result.stories]
-    if scans is None:
-        scans = scan_views(
-            result.mesh, [sp.model_faces for sp in result.stories], [sp.story.index for sp in result.stories],
-            sum(w.n_faces for w in walls), bool(result.input.points_read), max_faces,
-        )
-    layers = []
-    for sp, scan, wall_mesh in zip(result.stories, scans[0], walls):
-        i = sp.story.index
-        layers.append(ViewMesh(f"story {i}: scan", "scan", i, scan, len(sp.model_faces)))
-        layers.append(ViewMesh(f"story {i}: flat walls", "walls", i, wall_mesh, wall_mesh.n_faces))
-    return ViewMeshes(tuple(layers), max_faces, scans[1])
-
-
-def scan_views(
-    mesh: Mesh, groups: Sequence[np.ndarray], stories: Sequence[int], wall_faces: int, points: bool, max_faces: int = MAX_FACES
-) -> tuple[list[Mesh], float | None]:
-    """The scan's layers of the 3D view (:func:`view_meshes`): the faces ``groups`` of each of
-    the ``stories`` (their models' faces) within what ``max_faces`` leaves beside the flat
-    walls' ``wall_faces``, simplified (and the grid's cell, m) or, for a point cloud's splats
-    (``points``), subsampled (``None``)."""
-    budget = max(max_faces - wall_faces, 0)
-    if points:
+    budget = max(max_faces - sum(w.n_faces for w in walls), 0)
+    groups = [sp.model_faces for sp in result.stories]
+    cell: float | None = None
+    if result.input.points_read:
         n_scan = sum(len(f) for f in groups)
         frac = 1.0 if n_scan <= budget else budget / n_scan
         scans = [
-            submesh(mesh, f[subsample_faces(mesh.face_areas[f], int(math.floor(frac * len(f))), SUBSAMPLE_SEED + i)])
-            for i, f in zip(stories, groups)
+            submesh(mesh, f[subsample_faces(mesh.face_areas[f], int(math.floor(frac * len(f))), SUBSAMPLE_SEED + sp.story.index)])
+            for sp, f in zip(result.stories, groups)
         ]
-        return scans, None
-    return simplify_faces(mesh, groups, budget)
+    else:
+        scans, cell = simplify_faces(mesh, groups, budget)
+    layers = []
+    for sp, scan, wall_mesh in zip(result.stories, scans, walls):
+        i = sp.story.index
+        layers.append(ViewMesh(f"story {i}: scan", "scan", i, scan, len(sp.model_faces)))
+        layers.append(ViewMesh(f"story {i}: flat walls", "walls", i, wall_mesh, wall_mesh.n_faces))
+    return ViewMeshes(tuple(layers), max_faces, cell)
 
 
 # --------------------------------------------------------------------------------------------

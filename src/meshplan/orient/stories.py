@@ -89,9 +89,3 @@ def without_ceiling(heights: FloatArray, normal_y: FloatArray, story: Story, tol
     the rooms: everything but the ceiling surface and what lies above it."""
     ceiling = slab_faces(heights, normal_y, (story,), tolerance_m, floors=False)
     return ~ceiling & (heights < story.ceiling + tolerance_m)
-
-
-def model_faces(face_story: np.ndarray, heights: FloatArray, normal_y: FloatArray, story: Story, tolerance_m: float) -> np.ndarray:
-    """The faces of ``story`` its 3D model shows (indices, ascending): the story's faces
-    (``face_story``) without its ceiling (:func:`without_ceiling`)."""
-    return np.flatnonzero((face_story == story.index) & without_ceiling(heights, normal_y, story, tolerance_m))
