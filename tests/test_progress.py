@@ -183,3 +183,39 @@ def test_the_display_starts_after_the_drawing_workers_are_forked(scan, tmp_path,
         meshplan.run(scan, output=tmp_path / "out", progress=display.update, processes=2)
         assert threading.active_count() > alone  # then the display is live, with its thread
     assert threads_at_fork == [alone]
+
+
+def test_ctrl_c_on_a_terminal_shows_the_cursor_and_says_so_on_a_line_of_its_own(scan, tmp_path):
+    """Ctrl-C ends the run at once while its progress display is live (meshplan._ctrl_c): the
+    display hid the cursor and has no chance to show it again, so the program does, and its one
+    line starts on a line of its own instead of after the display's last."""
+    import signal
+    import time
+
+    master, slave = pty.openpty()
+    env = {**os.environ, "TERM": "xterm-256color", "COLUMNS": "200", "LINES": "50"}
+    argv = [sys.executable, "-m", "meshplan", "run", str(scan), "-o", str(tmp_path / "out")]
+    proc = subprocess.Popen(argv, stdin=subprocess.DEVNULL, stdout=slave, stderr=slave, env=env, start_new_session=True)
+    os.close(slave)
+    out, sent, deadline = b"", False, time.monotonic() + 120
+    try:
+        while time.monotonic() < deadline:
+            if not sent and STAGE_NAMES["load"].encode() in out:  # the display is live
+                os.killpg(proc.pid, signal.SIGINT)
+                sent = True
+            ready, _, _ = select.select([master], [], [], 0.05)
+            if ready:
+                try:
+                    data = os.read(master, 65536)
+                except OSError:  # EIO: the other side is closed
+                    break
+                if not data:
+                    break
+                out += data
+    finally:
+        os.close(master)
+        code = proc.wait(timeout=60)
+    assert sent and code == 130, (code, out[-300:])
+    assert out.count(b"\x1b[?25l") == out.count(b"\x1b[?25h") >= 1, out[-300:]
+    assert out.endswith(b"\x1b[?25h\r\nerror: interrupted; nothing was written\r\n"), out[-300:]
+    assert not (tmp_path / "out").exists()

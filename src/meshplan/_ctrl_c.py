@@ -25,11 +25,24 @@ MESSAGE = "error: interrupted; nothing was written"
 STATUS = 130
 
 
+#: Written before the message on a terminal: the cursor shown again (the progress display hides
+#: it, and exiting at once leaves it no chance to show it) and a new line (the display's last
+#: line, or the ``^C`` the terminal echoed, ends where the cursor stands).
+_ON_A_TERMINAL = "\x1b[?25h\n"
+
+
 def exit_at_once(signum: int, frame: Any) -> None:
     """The program's Ctrl-C handler while nothing is written: one line, exit 130. Written with
     ``os.write``: the main thread may have been interrupted inside ``sys.stderr.write``, whose
     buffer would refuse a reentrant call."""
-    os.write(2, (MESSAGE + "\n").encode())
+    try:
+        lead = _ON_A_TERMINAL if os.isatty(2) else ""
+    except OSError:  # stderr closed
+        lead = ""
+    try:
+        os.write(2, (lead + MESSAGE + "\n").encode())
+    except OSError:  # nowhere to say it
+        pass
     os._exit(STATUS)
 
 
