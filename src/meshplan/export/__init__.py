@@ -417,9 +417,14 @@ class RenderPool:
             self.terminate()
         self.executor.shutdown(wait=True, cancel_futures=True)
 
+    def processes(self) -> dict:
+        """The workers, ``pid -> multiprocessing.Process`` (none without an executor). The
+        executor keeps them in ``_processes``, which it does not publish otherwise."""
+        return dict(getattr(self.executor, "_processes", None) or {})
+
     def terminate(self) -> None:
         """Kill the workers now (their jobs are lost)."""
-        processes = dict(getattr(self.executor, "_processes", None) or {})
+        processes = self.processes()
         for proc in processes.values():
             try:
                 proc.kill()
@@ -475,7 +480,7 @@ def _wait(pool: RenderPool, future):
     for :data:`WORKER_STALL_S` while it was awaited."""
     from concurrent.futures import TimeoutError as FutureTimeout
 
-    pids = list(dict(getattr(pool.executor, "_processes", None) or {}))
+    pids = list(pool.processes())
     ticks, since = _cpu_ticks(pids), time.monotonic()
     while True:
         try:

@@ -601,7 +601,8 @@ def _gaps(ev: WallEvidence, w: int, floor: float, ceiling: float) -> list[Candid
     grid = closed(raster(at, near, far))
 
     # the corners in the slab: their depths and positions taken from those of the faces kept
-    vd = d[keep].reshape(-1)
+    d_kept = d[keep]
+    vd = d_kept.reshape(-1)
     in_slab = (vd >= far) & (vd <= near)
     vd, vu, vy = vd[in_slab], u[keep].reshape(-1)[in_slab], tri[:, :, 1].reshape(-1)[in_slab]
     floor_cols = _floor_beyond(ev, w, n3, t3, off, floor, lo, ncol, cell, params)
@@ -714,7 +715,7 @@ def _gaps(ev: WallEvidence, w: int, floor: float, ceiling: float) -> list[Candid
     # windows whose glazing was scanned, set back in a reveal: holes in the face's own plane
     # over a surface behind it that faces the room (the wall's far face faces away)
     room = ev.normals[cand][keep] @ n3 > ev.cos
-    back = tri[room & (max3(tri @ n3 - off) < -RECESS_MIN_M)]
+    back = tri[room & (max3(d_kept) < -RECESS_MIN_M)]
     if len(back):
         face = raster(at, near, -RECESS_MIN_M)
         recess = ndimage.binary_closing(raster(cells(_samples(back, cell)), -RECESS_MIN_M, far), structure=np.ones((2, 2))) & ~face
