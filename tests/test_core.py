@@ -96,6 +96,48 @@ def test_a_mesh_computes_its_released_arrays_again():
         np.testing.assert_array_equal(a, b)
 
 
+@pytest.mark.parametrize("matrix", [homogeneous(rotation_about_y(0.7), [1, 2, 3]), np.diag([-1.0, 1, 1, 1])])
+def test_a_transformed_mesh_reuses_the_arrays_its_source_gives_up_and_no_others(matrix):
+    """``transformed(..., reuse=True)`` writes the mapped corners and cross products over the
+    source's (the plan mesh's way: 0.29 GB of fresh memory at 3M faces), the same numbers as
+    into fresh arrays; the source forgets them and computes them again if asked; an array
+    something else still refers to (a view of it) is never written over, nor where a mirror
+    reorders the corners."""
+    rng = np.random.default_rng(5)
+    v = rng.normal(size=(400, 3))
+    f = np.array([t for t in rng.integers(0, 400, size=(2000, 3)) if len(set(t)) == 3])
+    flip = rng.random(len(f)) < 0.3
+    expected = Mesh(v, f)
+    _ = expected.face_normals
+    expected = expected.transformed(matrix, flip)  # into fresh arrays
+    mirror = np.linalg.det(matrix[:3, :3]) < 0
+
+    src = Mesh(v, f)
+    _ = src.face_normals
+    before = src.triangles.copy()
+    address = src.triangles.ctypes.data, src._cross.ctypes.data
+    out = src.transformed(matrix, flip, reuse=True)
+    np.testing.assert_array_equal(out.triangles, expected.triangles)
+    np.testing.assert_array_equal(out._cross, expected._cross)
+    np.testing.assert_array_equal(out.face_normals, expected.face_normals)
+    reused = (out.triangles.ctypes.data, out._cross.ctypes.data) == address
+    assert reused is (not mirror)
+    assert not out.triangles.flags.writeable and not out._cross.flags.writeable
+    if reused:  # the memory's owner is read-only again as well
+        assert not out.triangles.base.flags.writeable
+    assert not {"triangles", "_cross"} & set(src.__dict__)
+    np.testing.assert_array_equal(src.triangles, before)  # computed again from its vertices
+
+    held = Mesh(v, f)
+    _ = held.face_normals
+    column = held.triangles[:, 0]  # a view: someone still reads the source's corners
+    kept = column.copy()
+    out = held.transformed(matrix, flip, reuse=True)
+    np.testing.assert_array_equal(column, kept)
+    np.testing.assert_array_equal(out.triangles, expected.triangles)
+    assert not np.shares_memory(out.triangles, column)
+
+
 def test_annotations_transform():
     ann = Annotations(("S1",), ("sensor",), [[1, 0, 0]], [[0, 0, 1]])
     m = homogeneous(rotation_about_y(np.pi / 2), [0, 5, 0])

@@ -102,13 +102,15 @@ def settle_up(mesh: Mesh, orientation: Orientation, options: RunOptions) -> Upri
     Parameters
     ----------
     mesh
-        The scan in input coordinates, metres.
+        The scan in input coordinates, metres. Unless the way up is in doubt, it gives its
+        corners and cross products to the plan mesh (:meth:`Mesh.transformed`'s ``reuse``).
     orientation
         What :func:`meshplan.orient.orient` (or the plausibility checks around it) found.
     options
         Every parameter of the run.
     """
-    plan_mesh = mesh.transformed(orientation.transform, orientation.flipped)
-    if up_in_doubt(orientation, options):
-        return up_by_doors(mesh, orientation, plan_mesh, options)
-    return Upright(orientation, plan_mesh)
+    if up_in_doubt(orientation, options):  # the scan is oriented again the other way up
+        return up_by_doors(mesh, orientation, mesh.transformed(orientation.transform, orientation.flipped), options)
+    # the scan's corners and cross products are not needed again: the plan mesh's are written
+    # over them (0.29 GB of fresh memory spared at 3M faces)
+    return Upright(orientation, mesh.transformed(orientation.transform, orientation.flipped, reuse=True))
