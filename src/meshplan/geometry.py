@@ -381,19 +381,20 @@ def thin_product(a: FloatArray, b: FloatArray) -> FloatArray:
         return a @ b
 
 
-#: Rows mapped at a time by :func:`_affine_rows`: a block's product (1.5 MB) comes from the heap's
-#: reused memory, so that mapping an array in place needs no array of its size.
-AFFINE_BLOCK_ROWS = 1 << 16
+#: Rows taken at a time by the passes over per-face arrays done a block at a time
+#: (:func:`_affine_rows`): a block's temporaries (1.5 MB for three float64 columns) come from
+#: the heap's reused memory instead of fresh pages of the whole array's size.
+BLOCK_ROWS = 1 << 16
 
 
 def _affine_rows(rows: FloatArray, linear: np.ndarray, shift: np.ndarray | None, out: FloatArray) -> FloatArray:
     """``rows @ linear + shift`` into ``out`` (which may be ``rows`` itself), a block of rows at
     a time (each row's product is the same as in one product of the whole array)."""
-    for i in range(0, len(rows), AFFINE_BLOCK_ROWS):
-        block = rows[i : i + AFFINE_BLOCK_ROWS] @ linear
+    for i in range(0, len(rows), BLOCK_ROWS):
+        block = rows[i : i + BLOCK_ROWS] @ linear
         if shift is not None:
             block += shift
-        out[i : i + AFFINE_BLOCK_ROWS] = block
+        out[i : i + BLOCK_ROWS] = block
     return out
 
 
