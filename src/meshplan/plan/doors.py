@@ -227,7 +227,12 @@ class Candidate:
 
 
 class WallEvidence:
-    """The mesh arranged once for every wall face's search."""
+    """The mesh arranged once for every wall face's search.
+
+    Several threads may search walls at once (:func:`meshplan.plan.openings.find_openings`):
+    what is computed on demand is published whole once computed (a thread that finds it
+    missing computes the same again), never filled in place.
+    """
 
     def __init__(self, mesh: Mesh, walls: FlatWalls, params: PlanParams, thickness: FloatArray | None = None) -> None:
         self.mesh = mesh
@@ -278,8 +283,9 @@ class WallEvidence:
             d = np.einsum("ij,ij->i", self.centroids[ok][:, [0, 2]], self.segment_normal[ok])
             k = int(seg.max()) + 1 if ok.any() else 0
             per = np.bincount(seg[ok], weights=w * d, minlength=k) / np.maximum(np.bincount(seg[ok], weights=w, minlength=k), 1e-12)
-            self._segment_offset = np.zeros(len(seg))
-            self._segment_offset[ok] = per[seg[ok]]
+            offsets = np.zeros(len(seg))
+            offsets[ok] = per[seg[ok]]
+            self._segment_offset = offsets  # complete when published: walls are searched in threads
         n = self.segment_normal[faces]
         d = np.abs(np.einsum("ij,ij->i", self.centroids[faces][:, [0, 2]], n) - self._segment_offset[faces])
         return np.where(self.segment[faces] >= 0, d, np.inf)
