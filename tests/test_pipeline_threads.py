@@ -40,34 +40,66 @@ def test_the_stages_run_with_one_blas_thread(monkeypatch):
     assert seen == [{1}]
 
 
-@pytest.mark.parametrize("preset, seed", [("hard", 3), ("multistory", 2)])
-def test_walls_searched_in_threads_give_the_openings_one_thread_finds(computed, monkeypatch, preset, seed):
-    """find_openings searches the walls in :data:`~meshplan.plan.openings.SEARCH_THREADS`
-    threads (each thread does take walls), and finds what one thread does, in the same order."""
+
+def _threads_seen(monkeypatch, module, name: str) -> set[int]:
+    """The threads that call ``module.name`` from now on (each call a little slow, so that
+    every thread of a pool gets parts however fast the first is)."""
     import threading
     import time
 
+    seen: set[int] = set()
+    searching = getattr(module, name)
+
+    def search(*args):
+        seen.add(threading.get_ident())
+        time.sleep(0.01)
+        return searching(*args)
+
+    monkeypatch.setattr(module, name, search)
+    return seen
+
+
+def _same(a, b, fields: tuple[str, ...]) -> None:
     import numpy as np
 
+    for name in fields:
+        x, y = getattr(a, name), getattr(b, name)
+        assert (np.array_equal(x, y) if isinstance(x, np.ndarray) else x == y), name
+
+
+@pytest.mark.parametrize("preset, seed", [("hard", 3), ("multistory", 2)])
+def test_walls_searched_in_threads_give_the_openings_one_thread_finds(computed, monkeypatch, preset, seed):
+    """find_openings searches the walls in :data:`~meshplan.geometry.SEARCH_THREADS` threads
+    (each thread does take walls), and finds what one thread does, in the same order."""
+    import meshplan.geometry as geometry
     import meshplan.plan.openings as op
 
     _, result = computed(preset, seed)
-    searching = op.wall_candidates
-    threads: set[int] = set()
-
-    def search(*args):
-        threads.add(threading.get_ident())
-        time.sleep(0.01)  # every thread gets walls to search, however fast the first is
-        return searching(*args)
-
-    monkeypatch.setattr(op, "wall_candidates", search)
+    threads = _threads_seen(monkeypatch, op, "wall_candidates")
     found = {}
     for n in (1, 2):
-        monkeypatch.setattr(op, "SEARCH_THREADS", n)
+        monkeypatch.setattr(geometry, "SEARCH_THREADS", n)
         threads.clear()
         found[n] = op.find_openings(result.mesh, result.orientation, result.walls, result.options.plan)
-        assert len(threads) == min(n, len(result.walls))
+        assert len(threads) == n
     assert len(found[1]) >= 2
-    for name in ("story", "kind", "wall", "u_min", "u_max", "bottom", "top", "faces", "closed", "ragged"):
-        a, b = getattr(found[1], name), getattr(found[2], name)
-        assert (np.array_equal(a, b) if isinstance(a, np.ndarray) else a == b), name
+    _same(found[1], found[2], ("story", "kind", "wall", "u_min", "u_max", "bottom", "top", "faces", "closed", "ragged"))
+
+
+@pytest.mark.parametrize("preset, seed", [("hard", 1), ("multistory", 2)])
+def test_directions_searched_in_threads_give_the_walls_one_thread_finds(computed, monkeypatch, preset, seed):
+    """find_flat_walls searches each story's wall directions in threads (each thread does take
+    directions), and finds the walls one thread does, numbered the same."""
+    import meshplan.geometry as geometry
+    import meshplan.walls.flat as flat
+
+    _, result = computed(preset, seed)
+    threads = _threads_seen(monkeypatch, flat, "box_dbscan")
+    found = {}
+    for n in (1, 2):
+        monkeypatch.setattr(geometry, "SEARCH_THREADS", n)
+        threads.clear()
+        found[n] = flat.find_flat_walls(result.mesh, result.orientation, result.options.walls)
+        assert len(threads) == n
+    assert len(found[1]) >= 4
+    _same(found[1], found[2], ("story", "direction", "normal", "offset", "u_min", "u_max", "bottom", "top", "face_segment", "segment_story", "segment_kept", "segment_wall"))

@@ -24,13 +24,12 @@ one face and cut out of every face it passes through (``faces``).
 
 from __future__ import annotations
 
-import os
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
 
-from ..geometry import FloatArray, IntArray, Mesh
+from ..geometry import FloatArray, IntArray, Mesh, search_threads
 from ..orient import Orientation
 from ..walls import FlatWalls, PhysicalWall, WallParams, physical_walls
 from ..walls.flat import AJAR_MIN_TURN_DEG, segment_distances
@@ -41,13 +40,7 @@ from .params import PlanParams
 #: at least this share of the narrower (the two faces of a doorway measure nearly the same
 #: jambs; two doors side by side do not overlap at all).
 SAME_OPENING_OVERLAP = 0.5
-#: Threads searching the walls for openings at once (no more than the cores). On this
-#: project's 2-core machine, with one BLAS thread as in a run, the 3M-face apartment's walls
-#: were searched in 1.03-1.12 s by two threads against 1.53-1.58 s by one, the 300k-face
-#: apartment's in 0.19-0.21 s against 0.24-0.25 s (the same openings): the searches' numpy
-#: work runs beside each other, and a large scan's drawing worker is idle meanwhile. End to
-#: end, fresh runs alternated: 3M faces 9.5 s against 10.35 s, 300k faces 2.9 s against 3.0 s.
-SEARCH_THREADS = 2
+
 #: Faces within this angle (degrees) are parallel for merging: the faces of one wall share a
 #: wall direction, whose members are exactly parallel.
 PARALLEL_DEG = 10.0
@@ -187,10 +180,9 @@ def find_openings(
         story = orientation.stories[int(walls.story[w])]
         return wall_candidates(ev, w, story.floor, story.ceiling)
 
-    # the walls searched in threads: each search is numpy's work on arrays of thousands to
-    # hundreds of thousands of faces, much of it without the interpreter's lock; the
-    # candidates are taken in the walls' order, as one thread would find them
-    with ThreadPoolExecutor(max(1, min(SEARCH_THREADS, len(walls), os.cpu_count() or 1))) as pool:
+    # the walls searched in threads (meshplan.geometry.SEARCH_THREADS), the candidates taken
+    # in the walls' order, as one thread finds them
+    with ThreadPoolExecutor(search_threads(len(walls))) as pool:
         found: list[Candidate] = [c for cands in pool.map(search, range(len(walls))) for c in cands]
     found = _without_leaf_windows(found, walls, params)
     if not found:

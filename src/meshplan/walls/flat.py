@@ -32,14 +32,15 @@ evidence lives in :mod:`~meshplan.walls.evidence`.
 
 from __future__ import annotations
 
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.special import fdtri, stdtrit  # F and Student t quantiles, without importing scipy.stats (0.4 s)
 
 from .._kernels import centroids_areas, scatter_max, scatter_min
-from ..geometry import FloatArray, IntArray, Mesh, max3
-from ..orient import Orientation
+from ..geometry import FloatArray, IntArray, Mesh, max3, search_threads
+from ..orient import Orientation, Story
 from .boxdbscan import box_dbscan
 from .evidence import (
     CEILING_TOLERANCE_M,
@@ -1134,6 +1135,41 @@ def _front_at(raster: StoryRaster, tip: FloatArray, tangent: FloatArray, top: fl
     return False
 
 
+@dataclass(frozen=True, eq=False)
+class _StoryAt:
+    """What :func:`find_flat_walls` searches each direction of a story with."""
+
+    story: Story
+    ceiling: float | None  # the scanned ceiling's height, None where the walls stop short of it
+    raster: StoryRaster
+    below: list[dict]  # walls of the story below that reach its ceiling
+    in_story: np.ndarray  # which faces (or their pieces) are the story's wall evidence
+    half: FloatArray  # the DBSCAN box's half extents
+
+
+@dataclass(frozen=True, eq=False)
+class _DirectionPieces:
+    """The pieces of wall :func:`find_flat_walls` found facing one direction of a story: the
+    ``faces`` (or their pieces) in a DBSCAN segment and the sub-segment of each (``sub``: the
+    straight pieces first, ``n_pieces`` of them, then the other runs, then the rest of each
+    segment), which sub-segments have faces, and each piece's normal, offset, extent along,
+    bottom, top, support (faces) and area."""
+
+    direction: int
+    faces: IntArray
+    sub: IntArray
+    present: np.ndarray
+    n_pieces: int
+    normal: FloatArray
+    offset: FloatArray
+    u_min: FloatArray
+    u_max: FloatArray
+    bottom: FloatArray
+    top: FloatArray
+    support: IntArray
+    area: np.ndarray
+
+
 def find_flat_walls(mesh: Mesh, orientation: Orientation, params: WallParams | None = None) -> FlatWalls:
     """Flat walls of every story of an oriented mesh.
 
@@ -1179,129 +1215,144 @@ def find_flat_walls(mesh: Mesh, orientation: Orientation, params: WallParams | N
     objects = objects[parent] if split else objects
     # the faces facing each wall direction, the same in every story
     facing = [normals @ np.array([d[0], 0.0, d[1]]) >= cos_tol for d in dirs]
+    def direction_pieces(at: _StoryAt, d_index: int) -> _DirectionPieces | None:
+        """The straight pieces of wall of story ``at`` facing direction ``d_index``, from its
+        DBSCAN segments (``None`` where it has too few faces or no segment)."""
+        story, ceiling, raster, below = at.story, at.ceiling, at.raster, at.below
+        d = dirs[d_index]
+        n3 = np.array([d[0], 0.0, d[1]])
+        t3 = np.array([-d[1], 0.0, d[0]])
+        idx = np.flatnonzero(at.in_story & facing[d_index])
+        if len(idx) < params.min_points:
+            return None
+        c = centroids[idx]
+        pts = np.c_[c @ t3, c @ n3, c[:, 1]]
+        labels, _ = box_dbscan(pts, at.half, params.min_points)
+        k = int(labels.max()) + 1
+        if k == 0:
+            return None
+        ok = labels >= 0
+        lab, fidx = labels[ok], idx[ok]
+        verts = tri[fidx]  # (n, 3, 3)
+        vu = verts @ t3
+        across_c = pts[ok, 1]
+        across_order = np.argsort(across_c, kind="stable")  # shared by the two medians
+        offset = group_weighted_median(lab, across_c, areas[fidx], k, across_order)
+        u_lo, u_hi = _group_minmax(np.repeat(lab, 3), vu.reshape(-1), k)
+        cols = columns(lab, pts[ok, 0], vu, verts[..., 1], across_c, areas[fidx], width, across_order)
+        wall, neutral, edge, grazed = _wall_columns(cols, raster, d, story.floor, ceiling, width, params)
+        wall |= _continues(below, d_index, d, offset, u_lo, u_hi, params)[cols.segment]
+        wall |= _in_line_of_walls(cols, wall, grazed, offset, u_lo, u_hi, params)
+        run = runs(cols, wall, neutral, grazed)
+        n_runs = int(run.max()) + 1
+        # the runs long enough and coming near the floor
+        run_face = run[cols.face_column]
+        r_ok = run_face >= 0
+        r_lo, r_hi = _group_minmax(np.repeat(run_face[r_ok], 3), vu[r_ok].reshape(-1), max(n_runs, 1))
+        r_bottom, _ = _group_minmax(np.repeat(run_face[r_ok], 3), verts[r_ok][..., 1].reshape(-1), max(n_runs, 1))
+        # a run at the edge of the scan (nothing behind any of its wall columns) may have its
+        # foot hidden by what stands against it: seen over half the height is enough there
+        r_edge = np.ones(max(n_runs, 1), dtype=bool)
+        np.logical_and.at(r_edge, run[wall & (run >= 0)], edge[wall & (run >= 0)])
+        keep_run = (r_hi - r_lo >= params.min_wall_length_m) & ((r_bottom <= story.floor + params.floor_reach_m) | r_edge[: max(n_runs, 1)])
+        piece_of_col, piece_normals = _pieces(cols, run, keep_run, d, params)
+        n_pieces = len(piece_normals)
+        # sub-segments: each straight piece of a kept run, then the other runs, then the
+        # rest of each DBSCAN segment
+        sub_of_col = np.where(piece_of_col >= 0, piece_of_col, np.where(run >= 0, n_pieces + run, n_pieces + n_runs + cols.segment))
+        sub = sub_of_col[cols.face_column]
+        m = n_pieces + n_runs + k
+        # each piece in its own frame: along its tangent and across its normal
+        pn = np.array(piece_normals).reshape(-1, 2)
+        own = sub < n_pieces
+        fn = np.where(own[:, None], pn[np.minimum(sub, max(n_pieces - 1, 0))] if n_pieces else d, d)
+        ft = np.c_[-fn[:, 1], fn[:, 0]]
+        along = np.einsum("fkj,fj->fk", verts[..., [0, 2]], ft)  # (n, 3) corners along
+        across = np.einsum("fj,fj->f", centroids[fidx][:, [0, 2]], fn)
+        p_lo, p_hi = _group_minmax(np.repeat(sub, 3), along.reshape(-1), m)
+        y_lo, y_hi = _group_minmax(np.repeat(sub, 3), verts[..., 1].reshape(-1), m)
+        p_off = group_weighted_median(sub, across, areas[fidx], m)
+        # support: the faces of the mesh (not their pieces) in each sub-segment
+        if split:
+            pairs = np.unique(sub * np.int64(mesh.n_faces) + parent[fidx])
+            support = np.bincount(pairs // mesh.n_faces, minlength=m)
+        else:  # every piece is a face of its own
+            support = np.bincount(sub, minlength=m)
+        area = np.bincount(sub, weights=areas[fidx], minlength=m)
+        present = np.bincount(sub, minlength=m) > 0
+        return _DirectionPieces(d_index, fidx, sub, present, n_pieces, pn, p_off, p_lo, p_hi, y_lo, y_hi, support, area)
+
     piece_segment = np.full(len(tri), -1, dtype=np.int64)
     seg_story: list[int] = []
     seg_kept: list[bool] = []
     rows: list[dict] = []
     below: list[dict] = []  # walls of the story below that reach its ceiling
-    for story in orientation.stories:
-        ceiling = story.ceiling if story.ceiling_found else None
-        story_faces = np.flatnonzero(face_story == story.index)
-        # the story's faces (the scan's own arrays when they are all of them: a single story's
-        # corners copied were 216 MB at 3M faces, twice)
-        story_tri, story_normals = (tri, normals) if len(story_faces) == len(tri) else (tri[story_faces], normals[story_faces])
-        if ceiling is not None and _walls_short_of(story_tri, story_normals, story.floor, ceiling):
-            # the ceiling was scanned but no wall up to it (a user who looked up in the middle
-            # of the rooms only): the walls' tops are lost in the band under it, as in a story
-            # without a ceiling, which is what they are judged against (the ceiling and what
-            # rounds into it, the band WALLS_SHORT_M under it, left out of the rasters)
-            story_faces = story_faces[centroids[story_faces, 1] <= ceiling - WALLS_SHORT_M]
-            story_tri, story_normals = tri[story_faces], normals[story_faces]
-            ceiling = None
-        # without a scanned ceiling the assumed one bounds nothing: the story's faces go up to
-        # its top boundary (the next story, or the top of the scan)
-        story_top = story.ceiling if ceiling is not None else story.top
-        in_story = (face_story == story.index) & ~objects & (centroids[:, 1] > story.floor) & (centroids[:, 1] < story_top)
-        raster = story_raster(story_tri, story_normals, story.floor, ceiling)
-        height = params.box_height_m or story.height
-        half = np.array([params.box_length_m / 2, params.box_depth_m / 2, height / 2])
-        found: list[dict] = []
-        for d_index, d in enumerate(dirs):
-            n3 = np.array([d[0], 0.0, d[1]])
-            t3 = np.array([-d[1], 0.0, d[0]])
-            idx = np.flatnonzero(in_story & facing[d_index])
-            if len(idx) < params.min_points:
-                continue
-            c = centroids[idx]
-            pts = np.c_[c @ t3, c @ n3, c[:, 1]]
-            labels, _ = box_dbscan(pts, half, params.min_points)
-            k = int(labels.max()) + 1
-            if k == 0:
-                continue
-            ok = labels >= 0
-            lab, fidx = labels[ok], idx[ok]
-            verts = tri[fidx]  # (n, 3, 3)
-            vu = verts @ t3
-            across_c = pts[ok, 1]
-            across_order = np.argsort(across_c, kind="stable")  # shared by the two medians
-            offset = group_weighted_median(lab, across_c, areas[fidx], k, across_order)
-            u_lo, u_hi = _group_minmax(np.repeat(lab, 3), vu.reshape(-1), k)
-            cols = columns(lab, pts[ok, 0], vu, verts[..., 1], across_c, areas[fidx], width, across_order)
-            wall, neutral, edge, grazed = _wall_columns(cols, raster, d, story.floor, ceiling, width, params)
-            wall |= _continues(below, d_index, d, offset, u_lo, u_hi, params)[cols.segment]
-            wall |= _in_line_of_walls(cols, wall, grazed, offset, u_lo, u_hi, params)
-            run = runs(cols, wall, neutral, grazed)
-            n_runs = int(run.max()) + 1
-            # the runs long enough and coming near the floor
-            run_face = run[cols.face_column]
-            r_ok = run_face >= 0
-            r_lo, r_hi = _group_minmax(np.repeat(run_face[r_ok], 3), vu[r_ok].reshape(-1), max(n_runs, 1))
-            r_bottom, _ = _group_minmax(np.repeat(run_face[r_ok], 3), verts[r_ok][..., 1].reshape(-1), max(n_runs, 1))
-            # a run at the edge of the scan (nothing behind any of its wall columns) may have its
-            # foot hidden by what stands against it: seen over half the height is enough there
-            r_edge = np.ones(max(n_runs, 1), dtype=bool)
-            np.logical_and.at(r_edge, run[wall & (run >= 0)], edge[wall & (run >= 0)])
-            keep_run = (r_hi - r_lo >= params.min_wall_length_m) & ((r_bottom <= story.floor + params.floor_reach_m) | r_edge[: max(n_runs, 1)])
-            piece_of_col, piece_normals = _pieces(cols, run, keep_run, d, params)
-            n_pieces = len(piece_normals)
-            # sub-segments: each straight piece of a kept run, then the other runs, then the
-            # rest of each DBSCAN segment
-            sub_of_col = np.where(piece_of_col >= 0, piece_of_col, np.where(run >= 0, n_pieces + run, n_pieces + n_runs + cols.segment))
-            sub = sub_of_col[cols.face_column]
-            m = n_pieces + n_runs + k
-            # each piece in its own frame: along its tangent and across its normal
-            pn = np.array(piece_normals).reshape(-1, 2)
-            own = sub < n_pieces
-            fn = np.where(own[:, None], pn[np.minimum(sub, max(n_pieces - 1, 0))] if n_pieces else d, d)
-            ft = np.c_[-fn[:, 1], fn[:, 0]]
-            along = np.einsum("fkj,fj->fk", verts[..., [0, 2]], ft)  # (n, 3) corners along
-            across = np.einsum("fj,fj->f", centroids[fidx][:, [0, 2]], fn)
-            p_lo, p_hi = _group_minmax(np.repeat(sub, 3), along.reshape(-1), m)
-            y_lo, y_hi = _group_minmax(np.repeat(sub, 3), verts[..., 1].reshape(-1), m)
-            p_off = group_weighted_median(sub, across, areas[fidx], m)
-            # support: the faces of the mesh (not their pieces) in each sub-segment
-            if split:
-                pairs = np.unique(sub * np.int64(mesh.n_faces) + parent[fidx])
-                support = np.bincount(pairs // mesh.n_faces, minlength=m)
-            else:  # every piece is a face of its own
-                support = np.bincount(sub, minlength=m)
-            area = np.bincount(sub, weights=areas[fidx], minlength=m)
-            present = np.bincount(sub, minlength=m) > 0
-            keep = np.zeros(m, dtype=bool)
-            keep[:n_pieces] = True
-            # ids of the sub-segments that exist, in order
-            ids = np.cumsum(present) - 1 + len(seg_story)
-            piece_segment[fidx] = ids[sub]
-            seg_story.extend([story.index] * int(present.sum()))
-            seg_kept.extend(keep[present].tolist())
-            found.extend(
-                {
-                    "story": story.index,
-                    "direction": d_index,
-                    "normal": (float(pn[j, 0]), float(pn[j, 1])),
-                    "offset": float(p_off[j]),
-                    "u_min": float(p_lo[j]),
-                    "u_max": float(p_hi[j]),
-                    "bottom": float(y_lo[j]),
-                    "top": float(y_hi[j]),
-                    "support": int(support[j]),
-                    "area": float(area[j]),
-                    "segments": [int(ids[j])],
-                }
-                for j in range(n_pieces)
-                if present[j]
+    # each story's directions searched in threads (meshplan.geometry.SEARCH_THREADS)
+    with ThreadPoolExecutor(search_threads(len(dirs))) as pool:
+        for story in orientation.stories:
+            ceiling = story.ceiling if story.ceiling_found else None
+            story_faces = np.flatnonzero(face_story == story.index)
+            # the story's faces (the scan's own arrays when they are all of them: a single story's
+            # corners copied were 216 MB at 3M faces, twice)
+            story_tri, story_normals = (tri, normals) if len(story_faces) == len(tri) else (tri[story_faces], normals[story_faces])
+            if ceiling is not None and _walls_short_of(story_tri, story_normals, story.floor, ceiling):
+                # the ceiling was scanned but no wall up to it (a user who looked up in the middle
+                # of the rooms only): the walls' tops are lost in the band under it, as in a story
+                # without a ceiling, which is what they are judged against (the ceiling and what
+                # rounds into it, the band WALLS_SHORT_M under it, left out of the rasters)
+                story_faces = story_faces[centroids[story_faces, 1] <= ceiling - WALLS_SHORT_M]
+                story_tri, story_normals = tri[story_faces], normals[story_faces]
+                ceiling = None
+            # without a scanned ceiling the assumed one bounds nothing: the story's faces go up to
+            # its top boundary (the next story, or the top of the scan)
+            story_top = story.ceiling if ceiling is not None else story.top
+            in_story = (face_story == story.index) & ~objects & (centroids[:, 1] > story.floor) & (centroids[:, 1] < story_top)
+            raster = story_raster(story_tri, story_normals, story.floor, ceiling)
+            height = params.box_height_m or story.height
+            half = np.array([params.box_length_m / 2, params.box_depth_m / 2, height / 2])
+            # the directions' pieces numbered in the directions' order, as one thread finds them
+            found: list[dict] = []
+            at = _StoryAt(story, ceiling, raster, below, in_story, half)
+            for part in pool.map(direction_pieces, [at] * len(dirs), range(len(dirs))):
+                if part is None:
+                    continue
+                m = len(part.present)
+                keep = np.zeros(m, dtype=bool)
+                keep[: part.n_pieces] = True
+                # ids of the sub-segments that exist, in order
+                ids = np.cumsum(part.present) - 1 + len(seg_story)
+                piece_segment[part.faces] = ids[part.sub]
+                seg_story.extend([story.index] * int(part.present.sum()))
+                seg_kept.extend(keep[part.present].tolist())
+                pn = part.normal
+                found.extend(
+                    {
+                        "story": story.index,
+                        "direction": part.direction,
+                        "normal": (float(pn[j, 0]), float(pn[j, 1])),
+                        "offset": float(part.offset[j]),
+                        "u_min": float(part.u_min[j]),
+                        "u_max": float(part.u_max[j]),
+                        "bottom": float(part.bottom[j]),
+                        "top": float(part.top[j]),
+                        "support": int(part.support[j]),
+                        "area": float(part.area[j]),
+                        "segments": [int(ids[j])],
+                    }
+                    for j in range(part.n_pieces)
+                    if part.present[j]
+                )
+            found = _split_at_crossings(_merge(found, params.box_depth_m / 2, params.merge_gap_m), params.min_wall_length_m)
+            free = (
+                _free_standing(found, raster, story.floor, ceiling, params) | _pilasters(found, params, raster) | _wall_cores(found, params)
+                | _outer_faces(found, raster, params)
             )
-        found = _split_at_crossings(_merge(found, params.box_depth_m / 2, params.merge_gap_m), params.min_wall_length_m)
-        free = (
-            _free_standing(found, raster, story.floor, ceiling, params) | _pilasters(found, params, raster) | _wall_cores(found, params)
-            | _outer_faces(found, raster, params)
-        )
-        for r in (r for r, f in zip(found, free) if f):
-            for sid in r["segments"]:
-                seg_kept[sid] = False
-        found = [r for r, f in zip(found, free) if not f]
-        rows.extend(found)
-        below = [r for r in found if r["top"] >= story.ceiling - params.ceiling_reach_m]
+            for r in (r for r, f in zip(found, free) if f):
+                for sid in r["segments"]:
+                    seg_kept[sid] = False
+            found = [r for r, f in zip(found, free) if not f]
+            rows.extend(found)
+            below = [r for r in found if r["top"] >= story.ceiling - params.ceiling_reach_m]
     rows.sort(key=lambda r: (r["story"], r["direction"], r["offset"], r["u_min"]))
     segment_wall = np.full(len(seg_story), -1, dtype=np.int64)
     for w, r in enumerate(rows):
