@@ -36,6 +36,7 @@ from __future__ import annotations
 
 import json
 import os
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field, replace
 from typing import Any
 
@@ -44,7 +45,7 @@ import shapely
 from shapely.geometry import Point, Polygon
 
 from ..errors import InputError
-from ..geometry import FloatArray, Mesh
+from ..geometry import FloatArray, Mesh, search_threads
 from ..orient import Story
 from ..walls import FlatWalls, PhysicalWall
 from ..walls.flat import AJAR_MAX_TURN_DEG, AJAR_MIN_TURN_DEG
@@ -762,8 +763,9 @@ def opening_elements(
     vertical = np.flatnonzero(np.abs(mesh.face_normals[:, 1]) < 0.5) if len(openings) else np.zeros(0, np.int64)
     c3 = mesh.face_centroids[vertical]
     every = _Near(c3[:, [0, 2]], c3[:, 1], mesh.face_normals[vertical][:, [0, 2]], mesh.face_areas[vertical])
-    out = []
-    for i in range(len(openings)):
+
+    def element(i: int) -> OpeningElement:
+        """The element of opening ``i``."""
         f = int(openings.wall[i])
         k = int(carrier[f]) if 0 <= f < len(carrier) else -1
         pw = physical[k] if k >= 0 else None
@@ -817,8 +819,12 @@ def opening_elements(
         else:
             level, why = "low", "no clear frame on either face (at the end of a scanned wall)"
         sill = float(openings.bottom[i] - story.floor) if kind == "window" else None
-        out.append(OpeningElement(k, clear, height, sill, (sides[0], sides[1]), opens_to, swing, level, why))
-    return tuple(out)
+        return OpeningElement(k, clear, height, sill, (sides[0], sides[1]), opens_to, swing, level, why)
+
+    # the openings looked at in threads (meshplan.geometry.SEARCH_THREADS: each looks at the
+    # faces around it, numpy's and GEOS's work), the elements in the openings' order
+    with ThreadPoolExecutor(search_threads(len(openings))) as pool:
+        return tuple(pool.map(element, range(len(openings))))
 
 
 def type_rooms(
