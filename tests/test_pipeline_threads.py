@@ -103,3 +103,46 @@ def test_directions_searched_in_threads_give_the_walls_one_thread_finds(computed
         assert len(threads) == n
     assert len(found[1]) >= 4
     _same(found[1], found[2], ("story", "direction", "normal", "offset", "u_min", "u_max", "bottom", "top", "face_segment", "segment_story", "segment_kept", "segment_wall"))
+
+
+def test_openings_looked_at_in_threads_give_the_elements_one_thread_gives(computed, monkeypatch):
+    """opening_elements looks at the openings in threads (each thread does take openings), and
+    gives the elements one thread gives, in the openings' order."""
+    import meshplan.geometry as geometry
+    import meshplan.plan.elements as elements
+
+    _, r = computed("multistory", 2)
+    threads = _threads_seen(monkeypatch, elements, "_rooms_near")
+    made = {}
+    for n in (1, 2):
+        monkeypatch.setattr(geometry, "SEARCH_THREADS", n)
+        threads.clear()
+        made[n] = elements.opening_elements(r.openings, r.walls, r.physical_walls, r.rooms, r.orientation.stories, r.mesh, r.options.plan)
+        assert len(threads) == n
+    assert len(made[1]) == len(r.openings) >= 2
+    assert [e.to_dict() for e in made[1]] == [e.to_dict() for e in made[2]] == [e.to_dict() for e in r.opening_elements]
+
+
+@pytest.mark.parametrize("select", [False, True])
+def test_a_mesh_sliced_in_threads_gives_the_slices_of_one_pass(computed, monkeypatch, select):
+    """slice_mesh cuts a large mesh's faces in consecutive runs in threads (each thread does
+    cut), and joins the same segments, levels and faces (indexing ``select``) as one pass."""
+    import numpy as np
+
+    import meshplan.geometry as geometry
+    import meshplan.slicing as slicing
+
+    _, r = computed("multistory", 2)
+    story = r.orientation.stories[0]
+    heights = np.linspace(story.floor + 0.05, story.ceiling - 0.05, 101)
+    faces = np.flatnonzero(r.orientation.face_story == 0)[::-1] if select else None  # any order
+    monkeypatch.setattr(slicing, "SLICE_THREAD_MIN_FACES", r.mesh.n_faces // 5)
+    threads = _threads_seen(monkeypatch, slicing, "_slice_rows")
+    cut = {}
+    for n in (1, 2):
+        monkeypatch.setattr(geometry, "SEARCH_THREADS", n)
+        threads.clear()
+        cut[n] = slicing.slice_mesh(r.mesh.triangles, heights, faces)
+        assert len(threads) == n
+    assert len(cut[1]) > 1000
+    _same(cut[1], cut[2], ("segments", "level", "face"))

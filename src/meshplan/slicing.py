@@ -12,13 +12,14 @@ triangle below it); a horizontal triangle lying in a plane gives none.
 
 from __future__ import annotations
 
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from .errors import ParameterError
-from .geometry import FloatArray, IntArray, max3, min3
+from .geometry import FloatArray, IntArray, max3, min3, search_threads
 
 
 @dataclass(frozen=True, eq=False)
@@ -63,6 +64,12 @@ def plane_heights(floor: float, ceiling: float, n: int) -> FloatArray:
 _ODD_CORNER = np.array([-1, 0, 1, 2, 2, 1, 0, -1], dtype=np.int64)
 
 
+#: Faces from which :func:`slice_mesh` cuts a mesh in threads (:data:`meshplan.geometry.SEARCH_THREADS`),
+#: this many at least for each: its passes are numpy's, much of them without the interpreter's
+#: lock; for fewer a thread's start and the joined arrays cost more than the pass saves.
+SLICE_THREAD_MIN_FACES = 200_000
+
+
 def slice_mesh(triangles: ArrayLike, heights: ArrayLike, select: ArrayLike | None = None) -> Slices:
     """Intersect triangles with the horizontal planes ``y = heights[i]``.
 
@@ -86,6 +93,27 @@ def slice_mesh(triangles: ArrayLike, heights: ArrayLike, select: ArrayLike | Non
     rows = None if select is None else np.asarray(select, dtype=np.int64).reshape(-1)
     if not len(tri) or not len(h) or (rows is not None and not len(rows)):
         return empty
+    n = len(tri) if rows is None else len(rows)
+    parts = search_threads(n // SLICE_THREAD_MIN_FACES)
+    if parts == 1:
+        return _slice_rows(tri, h, rows, empty)
+    # consecutive runs of the faces cut in threads, their segments joined in the faces' order:
+    # the slices one pass makes
+    cuts = np.linspace(0, n, parts + 1).astype(np.int64)
+    runs = [np.arange(a, b) if rows is None else rows[a:b] for a, b in zip(cuts[:-1], cuts[1:])]
+    with ThreadPoolExecutor(parts) as pool:
+        done = list(pool.map(_slice_rows, [tri] * parts, [h] * parts, runs, [empty] * parts))
+    return Slices(
+        h,
+        np.concatenate([d.segments for d in done]),
+        np.concatenate([d.level for d in done]),
+        np.concatenate([d.face + a for d, a in zip(done, cuts[:-1])]),
+    )
+
+
+def _slice_rows(tri: FloatArray, h: FloatArray, rows: IntArray | None, empty: Slices) -> Slices:
+    """:func:`slice_mesh` of the faces ``rows`` (all when ``None``) of ``tri``, its arguments
+    checked (``face`` indexing ``rows``)."""
     y = tri[:, :, 1] if rows is None else tri[rows, :, 1]
     lo, hi = min3(y), max3(y)
     # planes strictly above the lowest vertex and at or below the highest one can cut
