@@ -296,6 +296,26 @@ def test_a_worker_at_work_is_waited_for_however_long(monkeypatch):
         assert not pool.stuck
 
 
+def test_a_dxf_job_goes_to_whichever_side_is_free_first():
+    """A DXF job (:class:`meshplan.export._EitherSide`) goes to the worker when the worker's
+    last drawing ends before this process comes to the job, and is made here (once: the
+    worker's drawing ending later hands nothing over) when this process comes to it first."""
+    from meshplan.export import RenderPool, _EitherSide, _submit
+
+    with RenderPool(2) as pool:
+        (worker,) = pool.executor._processes
+        (drawn,) = _submit(pool, [(_spin, 0.0)])
+        drawn.result(timeout=60)
+        to_worker = _EitherSide(pool, (_spin, 0.0), drawn)
+        assert to_worker.files() == {"spun": b"%d" % worker}
+
+        (drawing,) = _submit(pool, [(_spin, 1.0)])
+        here = _EitherSide(pool, (_spin, 0.0), drawing)
+        assert here.files() == {"spun": b"%d" % os.getpid()}
+        drawing.result(timeout=60)
+        assert here.future is None  # nothing handed to the worker afterwards
+
+
 _SWALLOWED = """
 import signal, sys
 sys.argv[0] = "meshplan"

@@ -33,6 +33,8 @@ from .planjson import dumps, plan_document, plan_schema
 from .report import report_html, report_page
 
 if TYPE_CHECKING:  # pragma: no cover
+    from concurrent.futures import Future
+
     from ..geometry import Mesh
     from ..orient import Orientation
     from ..plan import PenAndInkPlan
@@ -515,6 +517,47 @@ def _result(job: tuple, future, pool: RenderPool) -> dict[str, bytes]:
     return _call(job)
 
 
+class _EitherSide:
+    """A job (a DXF file: no figure, pure Python) made by whichever of this process and the
+    pool's worker is free for it first.
+
+    This process makes it when it comes to it (after the models and the report's page), unless
+    the worker finished its last drawing before: then the job was handed to the worker (a
+    callback of that drawing's future), which this process waits for. On a large scan this
+    process's models and report page outlast the worker's drafting plans, which then takes the
+    DXF files (the 3M-face apartment: 0.3 s of the run's end); on a small one this process is
+    free first and keeps them. Either way the files are the same.
+    """
+
+    def __init__(self, pool: RenderPool, job: tuple, last) -> None:
+        import threading
+
+        self.pool, self.job = pool, job
+        self.future: Future | None = None  # the worker's, once handed over
+        self._lock = threading.Lock()
+        self._taken = False
+        if last is not None:
+            last.add_done_callback(self._hand_over)
+
+    def _hand_over(self, _done) -> None:
+        with self._lock:  # (held while submitting: files() then sees the future)
+            if self._taken or self.pool.stuck or self.pool.executor is None:
+                return
+            self._taken = True
+            try:
+                self.future = self.pool.executor.submit(_call, self.job)
+            except Exception as exc:  # the pool broken or shut down: made here (files())
+                log.debug("the DXF job stays in the main process (%s)", exc)
+
+    def files(self) -> dict[str, bytes]:
+        """The job's files, made here or the worker's."""
+        with self._lock:
+            mine, self._taken, future = not self._taken, True, self.future
+        if mine:
+            return _call(self.job)
+        return _result(self.job, future, self.pool)
+
+
 def _cad_files(result: Result) -> dict[str, bytes]:
     """The optional IFC and energy models (made in this process)."""
     files: dict[str, bytes] = {}
@@ -594,8 +637,9 @@ def render_files(result: Result, timer: _Timer | None = None, pool: RenderPool |
 
     The drawings are made by the workers of ``pool`` (one is opened here when none is given and
     ``RenderParams.processes`` asks for workers), those of ``early`` already under way; meanwhile
-    this process makes the GLB models, the DXF files and what the report needs of the result
-    (none of which draws a figure). Without workers everything is made here. The drawings count
+    this process makes the GLB models, what the report needs of the result and the DXF files
+    (none of which draws a figure; the DXF files go to the worker if it is done drawing first:
+    :class:`_EitherSide`). Without workers everything is made here. The drawings count
     as the paper's slicing-and-drawing time (``slice_draw``: until the last one is in); the rest
     (models, DXF files, report) as ``write``. The stages follow each other, so that their times
     add up to the wall time.
@@ -626,8 +670,12 @@ def render_files(result: Result, timer: _Timer | None = None, pool: RenderPool |
             parallel = any(f is not None for f in pending)
             page = None
             if parallel:  # the workers draw: make here what needs no drawing
-                files.update(_undrawn_files(result, dxf))
+                # the DXF files last: the worker takes them if it is done drawing first
+                either = [_EitherSide(pool, job, pending[-1]) for job in dxf]
+                files.update(_undrawn_files(result, []))
                 page = report_page(result)
+                for e in either:
+                    files.update(e.files())
             for job, future in zip(drawings, pending):
                 files.update(_result(job, future, pool))
         with stage("write"):
