@@ -13,7 +13,8 @@ the whole 300k-face run spent 1.2-2.0 s of system time instead of 0.7-1.4 s.
 up to :data:`MMAP_THRESHOLD_BYTES` come from the heap, and freed heap memory is kept for the
 next arrays up to :data:`TRIM_THRESHOLD_BYTES`. Larger blocks (a 3M-face scan's per-face
 arrays) are still mapped on their own and returned when freed, so the largest scans' peak
-memory does not grow with fragments of the heap. The command line calls it
+memory does not grow with fragments of the heap. The process's threads share that one heap
+(:data:`ARENAS`), so that what one frees the others reuse. The command line calls it
 (:func:`meshplan.cli.entry`); a program that imports meshplan keeps its own allocator settings.
 
 :func:`small_pages` keeps numpy from asking the kernel for transparent huge pages (2 MiB) for
@@ -38,16 +39,29 @@ MMAP_THRESHOLD_BYTES = 32 * 2**20
 #: Freed memory at the top of the heap is kept, not returned to the kernel, up to this size
 #: (bytes): a run's working set of mid-sized arrays (about 0.4 GB at 300k faces).
 TRIM_THRESHOLD_BYTES = 512 * 2**20
+#: The heaps (glibc's arenas) the process's threads allocate from: one. By default each thread
+#: that allocates gets a heap of its own (up to 8 per core), whose freed blocks, kept by the
+#: thresholds above, the other threads cannot reuse: once the stages searched their parts in
+#: threads (:data:`meshplan.geometry.SEARCH_THREADS`), the 3M-face run's peak rose from 1.70 to
+#: 1.75-1.97 GB, the freed memory of the threads' heaps beside the main heap's. With one heap
+#: shared by all: 1.68-1.69 GB, 1.6-1.8 s of system time against 2.0-2.4 s, 8.3-8.5 s end to
+#: end against 8.3-8.9 s (three alternated pairs). The threads' blocks are large (numpy's
+#: arrays), so that the shared heap's lock is taken seldom.
+ARENAS = 1
 #: The user's own settings of the same thresholds, which are left alone.
 _ENVIRONMENT = ("MALLOC_MMAP_THRESHOLD_", "MALLOC_TRIM_THRESHOLD_", "GLIBC_TUNABLES")
+#: The user's own setting of the number of heaps, which is left alone.
+_ARENA_VARIABLE = "MALLOC_ARENA_MAX"
 #: numpy's switch for huge pages (documented among numpy's environment variables).
 HUGEPAGE_VARIABLE = "NUMPY_MADVISE_HUGEPAGE"
 #: ``mallopt`` parameters (glibc's ``malloc.h``).
-_M_TRIM_THRESHOLD, _M_MMAP_THRESHOLD = -1, -3
+_M_TRIM_THRESHOLD, _M_MMAP_THRESHOLD, _M_ARENA_MAX = -1, -3, -8
 
 
 def keep_freed_memory() -> bool:
-    """Set glibc's ``malloc`` to keep and reuse the memory the run frees (see the module).
+    """Set glibc's ``malloc`` to keep and reuse the memory the run frees (see the module), in
+    one heap for all the process's threads (:data:`ARENAS`) unless ``MALLOC_ARENA_MAX`` says
+    otherwise.
 
     Returns
     -------
@@ -67,6 +81,8 @@ def keep_freed_memory() -> bool:
     except (OSError, AttributeError):
         return False
     mallopt.argtypes, mallopt.restype = [ctypes.c_int, ctypes.c_int], ctypes.c_int
+    if _ARENA_VARIABLE not in os.environ:
+        mallopt(_M_ARENA_MAX, ARENAS)  # before the run starts a thread
     return bool(mallopt(_M_MMAP_THRESHOLD, MMAP_THRESHOLD_BYTES)) and bool(mallopt(_M_TRIM_THRESHOLD, TRIM_THRESHOLD_BYTES))
 
 
