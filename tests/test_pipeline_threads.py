@@ -67,60 +67,57 @@ def _same(a, b, fields: tuple[str, ...]) -> None:
         assert (np.array_equal(x, y) if isinstance(x, np.ndarray) else x == y), name
 
 
+def _one_and_two_threads(monkeypatch, module, name: str, compute):
+    """``compute()`` with :data:`~meshplan.geometry.SEARCH_THREADS` 1 and 2, each time checking
+    that as many threads called ``module.name``."""
+    import meshplan.geometry as geometry
+
+    threads = _threads_seen(monkeypatch, module, name)
+    out = []
+    for n in (1, 2):
+        monkeypatch.setattr(geometry, "SEARCH_THREADS", n)
+        threads.clear()
+        out.append(compute())
+        assert len(threads) == n
+    return out
+
+
 @pytest.mark.parametrize("preset, seed", [("hard", 3), ("multistory", 2)])
 def test_walls_searched_in_threads_give_the_openings_one_thread_finds(computed, monkeypatch, preset, seed):
     """find_openings searches the walls in :data:`~meshplan.geometry.SEARCH_THREADS` threads
     (each thread does take walls), and finds what one thread does, in the same order."""
-    import meshplan.geometry as geometry
     import meshplan.plan.openings as op
 
     _, result = computed(preset, seed)
-    threads = _threads_seen(monkeypatch, op, "wall_candidates")
-    found = {}
-    for n in (1, 2):
-        monkeypatch.setattr(geometry, "SEARCH_THREADS", n)
-        threads.clear()
-        found[n] = op.find_openings(result.mesh, result.orientation, result.walls, result.options.plan)
-        assert len(threads) == n
-    assert len(found[1]) >= 2
-    _same(found[1], found[2], ("story", "kind", "wall", "u_min", "u_max", "bottom", "top", "faces", "closed", "ragged"))
+    one, two = _one_and_two_threads(monkeypatch, op, "wall_candidates", lambda: op.find_openings(result.mesh, result.orientation, result.walls, result.options.plan))
+    assert len(one) >= 2
+    _same(one, two, ("story", "kind", "wall", "u_min", "u_max", "bottom", "top", "faces", "closed", "ragged"))
 
 
 @pytest.mark.parametrize("preset, seed", [("hard", 1), ("multistory", 2)])
 def test_directions_searched_in_threads_give_the_walls_one_thread_finds(computed, monkeypatch, preset, seed):
     """find_flat_walls searches each story's wall directions in threads (each thread does take
     directions), and finds the walls one thread does, numbered the same."""
-    import meshplan.geometry as geometry
     import meshplan.walls.flat as flat
 
     _, result = computed(preset, seed)
-    threads = _threads_seen(monkeypatch, flat, "box_dbscan")
-    found = {}
-    for n in (1, 2):
-        monkeypatch.setattr(geometry, "SEARCH_THREADS", n)
-        threads.clear()
-        found[n] = flat.find_flat_walls(result.mesh, result.orientation, result.options.walls)
-        assert len(threads) == n
-    assert len(found[1]) >= 4
-    _same(found[1], found[2], ("story", "direction", "normal", "offset", "u_min", "u_max", "bottom", "top", "face_segment", "segment_story", "segment_kept", "segment_wall"))
+    one, two = _one_and_two_threads(monkeypatch, flat, "box_dbscan", lambda: flat.find_flat_walls(result.mesh, result.orientation, result.options.walls))
+    assert len(one) >= 4
+    _same(one, two, ("story", "direction", "normal", "offset", "u_min", "u_max", "bottom", "top", "face_segment", "segment_story", "segment_kept", "segment_wall"))
 
 
 def test_openings_looked_at_in_threads_give_the_elements_one_thread_gives(computed, monkeypatch):
     """opening_elements looks at the openings in threads (each thread does take openings), and
     gives the elements one thread gives, in the openings' order."""
-    import meshplan.geometry as geometry
     import meshplan.plan.elements as elements
 
     _, r = computed("multistory", 2)
-    threads = _threads_seen(monkeypatch, elements, "_rooms_near")
-    made = {}
-    for n in (1, 2):
-        monkeypatch.setattr(geometry, "SEARCH_THREADS", n)
-        threads.clear()
-        made[n] = elements.opening_elements(r.openings, r.walls, r.physical_walls, r.rooms, r.orientation.stories, r.mesh, r.options.plan)
-        assert len(threads) == n
-    assert len(made[1]) == len(r.openings) >= 2
-    assert [e.to_dict() for e in made[1]] == [e.to_dict() for e in made[2]] == [e.to_dict() for e in r.opening_elements]
+    one, two = _one_and_two_threads(
+        monkeypatch, elements, "_rooms_near",
+        lambda: elements.opening_elements(r.openings, r.walls, r.physical_walls, r.rooms, r.orientation.stories, r.mesh, r.options.plan),
+    )
+    assert len(one) == len(r.openings) >= 2
+    assert [e.to_dict() for e in one] == [e.to_dict() for e in two] == [e.to_dict() for e in r.opening_elements]
 
 
 @pytest.mark.parametrize("select", [False, True])
@@ -129,7 +126,6 @@ def test_a_mesh_sliced_in_threads_gives_the_slices_of_one_pass(computed, monkeyp
     cut), and joins the same segments, levels and faces (indexing ``select``) as one pass."""
     import numpy as np
 
-    import meshplan.geometry as geometry
     import meshplan.slicing as slicing
 
     _, r = computed("multistory", 2)
@@ -137,12 +133,6 @@ def test_a_mesh_sliced_in_threads_gives_the_slices_of_one_pass(computed, monkeyp
     heights = np.linspace(story.floor + 0.05, story.ceiling - 0.05, 101)
     faces = np.flatnonzero(r.orientation.face_story == 0)[::-1] if select else None  # any order
     monkeypatch.setattr(slicing, "SLICE_THREAD_MIN_FACES", r.mesh.n_faces // 5)
-    threads = _threads_seen(monkeypatch, slicing, "_slice_rows")
-    cut = {}
-    for n in (1, 2):
-        monkeypatch.setattr(geometry, "SEARCH_THREADS", n)
-        threads.clear()
-        cut[n] = slicing.slice_mesh(r.mesh.triangles, heights, faces)
-        assert len(threads) == n
-    assert len(cut[1]) > 1000
-    _same(cut[1], cut[2], ("segments", "level", "face"))
+    one, two = _one_and_two_threads(monkeypatch, slicing, "_slice_rows", lambda: slicing.slice_mesh(r.mesh.triangles, heights, faces))
+    assert len(one) > 1000
+    _same(one, two, ("segments", "level", "face"))

@@ -1151,23 +1151,16 @@ class _StoryAt:
 class _DirectionPieces:
     """The pieces of wall :func:`find_flat_walls` found facing one direction of a story: the
     ``faces`` (or their pieces) in a DBSCAN segment and the sub-segment of each (``sub``: the
-    straight pieces first, ``n_pieces`` of them, then the other runs, then the rest of each
-    segment), which sub-segments have faces, and each piece's normal, offset, extent along,
-    bottom, top, support (faces) and area."""
+    straight pieces first, then the other runs, then the rest of each segment), which
+    sub-segments have faces (``present``), how many are pieces, and the pieces' rows, each
+    naming its sub-segment among those present (numbered from 0 here, after the segments so far
+    once joined)."""
 
-    direction: int
     faces: IntArray
     sub: IntArray
     present: np.ndarray
     n_pieces: int
-    normal: FloatArray
-    offset: FloatArray
-    u_min: FloatArray
-    u_max: FloatArray
-    bottom: FloatArray
-    top: FloatArray
-    support: IntArray
-    area: np.ndarray
+    rows: list[dict]
 
 
 def find_flat_walls(mesh: Mesh, orientation: Orientation, params: WallParams | None = None) -> FlatWalls:
@@ -1280,7 +1273,25 @@ def find_flat_walls(mesh: Mesh, orientation: Orientation, params: WallParams | N
             support = np.bincount(sub, minlength=m)
         area = np.bincount(sub, weights=areas[fidx], minlength=m)
         present = np.bincount(sub, minlength=m) > 0
-        return _DirectionPieces(d_index, fidx, sub, present, n_pieces, pn, p_off, p_lo, p_hi, y_lo, y_hi, support, area)
+        local = np.cumsum(present) - 1  # the sub-segments present, numbered from 0
+        rows = [
+            {
+                "story": story.index,
+                "direction": d_index,
+                "normal": (float(pn[j, 0]), float(pn[j, 1])),
+                "offset": float(p_off[j]),
+                "u_min": float(p_lo[j]),
+                "u_max": float(p_hi[j]),
+                "bottom": float(y_lo[j]),
+                "top": float(y_hi[j]),
+                "support": int(support[j]),
+                "area": float(area[j]),
+                "segments": [int(local[j])],
+            }
+            for j in range(n_pieces)
+            if present[j]
+        ]
+        return _DirectionPieces(fidx, sub, present, n_pieces, rows)
 
     piece_segment = np.full(len(tri), -1, dtype=np.int64)
     seg_story: list[int] = []
@@ -1316,32 +1327,16 @@ def find_flat_walls(mesh: Mesh, orientation: Orientation, params: WallParams | N
             for part in pool.map(direction_pieces, [at] * len(dirs), range(len(dirs))):
                 if part is None:
                     continue
-                m = len(part.present)
-                keep = np.zeros(m, dtype=bool)
+                keep = np.zeros(len(part.present), dtype=bool)
                 keep[: part.n_pieces] = True
-                # ids of the sub-segments that exist, in order
-                ids = np.cumsum(part.present) - 1 + len(seg_story)
-                piece_segment[part.faces] = ids[part.sub]
+                # the sub-segments that exist, numbered after the segments so far
+                first = len(seg_story)
+                piece_segment[part.faces] = (np.cumsum(part.present) - 1 + first)[part.sub]
                 seg_story.extend([story.index] * int(part.present.sum()))
                 seg_kept.extend(keep[part.present].tolist())
-                pn = part.normal
-                found.extend(
-                    {
-                        "story": story.index,
-                        "direction": part.direction,
-                        "normal": (float(pn[j, 0]), float(pn[j, 1])),
-                        "offset": float(part.offset[j]),
-                        "u_min": float(part.u_min[j]),
-                        "u_max": float(part.u_max[j]),
-                        "bottom": float(part.bottom[j]),
-                        "top": float(part.top[j]),
-                        "support": int(part.support[j]),
-                        "area": float(part.area[j]),
-                        "segments": [int(ids[j])],
-                    }
-                    for j in range(part.n_pieces)
-                    if part.present[j]
-                )
+                for row in part.rows:
+                    row["segments"] = [row["segments"][0] + first]
+                found.extend(part.rows)
             found = _split_at_crossings(_merge(found, params.box_depth_m / 2, params.merge_gap_m), params.min_wall_length_m)
             free = (
                 _free_standing(found, raster, story.floor, ceiling, params) | _pilasters(found, params, raster) | _wall_cores(found, params)
