@@ -367,7 +367,9 @@ _THIN_PRODUCT_MIN_ROWS = 10_000
 
 #: Threads a stage searches its independent parts in at once (:func:`search_threads`): a
 #: story's wall directions (:func:`meshplan.walls.find_flat_walls`), the walls' openings
-#: (:func:`meshplan.plan.find_openings`). Each part is compiled code or numpy's work on arrays
+#: (:func:`meshplan.plan.find_openings`), the openings' elements
+#: (:func:`meshplan.plan.elements.opening_elements`), runs of a large story's faces
+#: (:func:`meshplan.slicing.slice_mesh`). Each part is compiled code or numpy's work on arrays
 #: of thousands of faces and more, much of it without the interpreter's lock, and the parts'
 #: results are taken in their order: the same result as one thread's. On this project's 2-core
 #: machine (one BLAS thread, as in a run) the 3M-face apartment's openings were searched in
@@ -419,10 +421,27 @@ def _affine_rows(rows: FloatArray, linear: np.ndarray, shift: np.ndarray | None,
 def _unshared(a: np.ndarray) -> bool:
     """Whether ``a`` holds its own memory and nothing refers to it but its holder and the
     caller's name for it: no view of it exists anywhere (a view refers to the array owning
-    its memory). CPython's reference count, as numpy's own reuse of temporaries reads it."""
-    # the references: the holder's (a cache entry), the caller's variable, this argument, and
-    # getrefcount's own
-    return a.base is None and sys.getrefcount(a) <= 4
+    its memory). CPython's reference count, as numpy's own reuse of temporaries reads it,
+    against that of an array held the same way (:func:`_held_refs`)."""
+    return a.base is None and sys.getrefcount(a) <= _HELD_REFS
+
+
+def _count_refs(a: np.ndarray) -> int:
+    """``a``'s reference count, read as :func:`_unshared` reads it (one call down)."""
+    return sys.getrefcount(a)
+
+
+def _held_refs() -> int:
+    """The reference count :func:`_unshared` reads for an array held by one cache entry and
+    one variable of its caller, nothing else: measured, since what the interpreter counts for
+    an argument differs between Python versions."""
+    cache = {"array": np.empty(0)}
+    array = cache["array"]
+    return _count_refs(array)
+
+
+#: What :func:`_unshared` reads for an array nothing else refers to.
+_HELD_REFS = _held_refs()
 
 
 def transform_points(matrix: ArrayLike, points: ArrayLike) -> FloatArray:
