@@ -15,9 +15,11 @@ from __future__ import annotations
 
 import os
 import sys
+from collections.abc import Callable
 from contextlib import AbstractContextManager
 from dataclasses import dataclass, field
 from functools import cached_property
+from typing import TypeVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -26,6 +28,8 @@ from .errors import ParameterError
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
+#: What a part of :func:`in_threads` gives.
+T = TypeVar("T")
 
 #: The kinds of annotated object meshplan knows about.
 ANNOTATION_KINDS = ("sensor", "thermostat", "window", "door", "other")
@@ -382,6 +386,18 @@ def search_threads(parts: int) -> int:
     """How many threads search ``parts`` independent parts: :data:`SEARCH_THREADS`, no more
     than the parts or the cores, at least one."""
     return max(1, min(SEARCH_THREADS, parts, os.cpu_count() or 1))
+
+
+def in_threads(search: Callable[[int], T], parts: int) -> list[T]:
+    """``[search(0), ..., search(parts - 1)]``, the parts searched in :func:`search_threads`
+    threads (in the caller's thread when that is one)."""
+    threads = search_threads(parts)
+    if threads == 1:
+        return [search(i) for i in range(parts)]
+    from concurrent.futures import ThreadPoolExecutor
+
+    with ThreadPoolExecutor(threads) as pool:
+        return list(pool.map(search, range(parts)))
 
 
 def few_blas_threads() -> AbstractContextManager[object]:

@@ -12,14 +12,13 @@ triangle below it); a horizontal triangle lying in a plane gives none.
 
 from __future__ import annotations
 
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from .errors import ParameterError
-from .geometry import FloatArray, IntArray, max3, min3, search_threads
+from .geometry import FloatArray, IntArray, in_threads, max3, min3, search_threads
 
 
 @dataclass(frozen=True, eq=False)
@@ -101,8 +100,7 @@ def slice_mesh(triangles: ArrayLike, heights: ArrayLike, select: ArrayLike | Non
     # the slices one pass makes
     cuts = np.linspace(0, n, parts + 1).astype(np.int64)
     runs = [np.arange(a, b) if rows is None else rows[a:b] for a, b in zip(cuts[:-1], cuts[1:])]
-    with ThreadPoolExecutor(parts) as pool:
-        done = list(pool.map(_slice_rows, [tri] * parts, [h] * parts, runs, [empty] * parts))
+    done = in_threads(lambda i: _slice_rows(tri, h, runs[i], empty), parts)
     return Slices(
         h,
         np.concatenate([d.segments for d in done]),

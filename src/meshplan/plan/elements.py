@@ -36,7 +36,6 @@ from __future__ import annotations
 
 import json
 import os
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field, replace
 from typing import Any
 
@@ -45,7 +44,7 @@ import shapely
 from shapely.geometry import Point, Polygon
 
 from ..errors import InputError
-from ..geometry import FloatArray, Mesh, search_threads
+from ..geometry import FloatArray, Mesh, in_threads
 from ..orient import Story
 from ..walls import FlatWalls, PhysicalWall
 from ..walls.flat import AJAR_MAX_TURN_DEG, AJAR_MIN_TURN_DEG
@@ -823,8 +822,7 @@ def opening_elements(
 
     # the openings looked at in threads (meshplan.geometry.SEARCH_THREADS: each looks at the
     # faces around it, numpy's and GEOS's work), the elements in the openings' order
-    with ThreadPoolExecutor(search_threads(len(openings))) as pool:
-        return tuple(pool.map(element, range(len(openings))))
+    return tuple(in_threads(element, len(openings)))
 
 
 def type_rooms(

@@ -24,12 +24,11 @@ one face and cut out of every face it passes through (``faces``).
 
 from __future__ import annotations
 
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
 
-from ..geometry import FloatArray, IntArray, Mesh, search_threads
+from ..geometry import FloatArray, IntArray, Mesh, in_threads
 from ..orient import Orientation
 from ..walls import FlatWalls, PhysicalWall, WallParams, physical_walls
 from ..walls.flat import AJAR_MIN_TURN_DEG, segment_distances
@@ -40,7 +39,6 @@ from .params import PlanParams
 #: at least this share of the narrower (the two faces of a doorway measure nearly the same
 #: jambs; two doors side by side do not overlap at all).
 SAME_OPENING_OVERLAP = 0.5
-
 #: Faces within this angle (degrees) are parallel for merging: the faces of one wall share a
 #: wall direction, whose members are exactly parallel.
 PARALLEL_DEG = 10.0
@@ -182,8 +180,7 @@ def find_openings(
 
     # the walls searched in threads (meshplan.geometry.SEARCH_THREADS), the candidates taken
     # in the walls' order, as one thread finds them
-    with ThreadPoolExecutor(search_threads(len(walls))) as pool:
-        found: list[Candidate] = [c for cands in pool.map(search, range(len(walls))) for c in cands]
+    found: list[Candidate] = [c for cands in in_threads(search, len(walls)) for c in cands]
     found = _without_leaf_windows(found, walls, params)
     if not found:
         return _empty()

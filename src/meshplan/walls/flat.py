@@ -32,14 +32,14 @@ evidence lives in :mod:`~meshplan.walls.evidence`.
 
 from __future__ import annotations
 
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, replace
+from functools import partial
 
 import numpy as np
 from scipy.special import fdtri, stdtrit  # F and Student t quantiles, without importing scipy.stats (0.4 s)
 
 from .._kernels import centroids_areas, scatter_max, scatter_min
-from ..geometry import FloatArray, IntArray, Mesh, max3, search_threads
+from ..geometry import FloatArray, IntArray, Mesh, in_threads, max3
 from ..orient import Orientation, Story
 from .boxdbscan import box_dbscan
 from .evidence import (
@@ -1136,18 +1136,6 @@ def _front_at(raster: StoryRaster, tip: FloatArray, tangent: FloatArray, top: fl
 
 
 @dataclass(frozen=True, eq=False)
-class _StoryAt:
-    """What :func:`find_flat_walls` searches each direction of a story with."""
-
-    story: Story
-    ceiling: float | None  # the scanned ceiling's height, None where the walls stop short of it
-    raster: StoryRaster
-    below: list[dict]  # walls of the story below that reach its ceiling
-    in_story: np.ndarray  # which faces (or their pieces) are the story's wall evidence
-    half: FloatArray  # the DBSCAN box's half extents
-
-
-@dataclass(frozen=True, eq=False)
 class _DirectionPieces:
     """The pieces of wall :func:`find_flat_walls` found facing one direction of a story: the
     ``faces`` (or their pieces) in a DBSCAN segment and the sub-segment of each (``sub``: the
@@ -1208,19 +1196,24 @@ def find_flat_walls(mesh: Mesh, orientation: Orientation, params: WallParams | N
     objects = objects[parent] if split else objects
     # the faces facing each wall direction, the same in every story
     facing = [normals @ np.array([d[0], 0.0, d[1]]) >= cos_tol for d in dirs]
-    def direction_pieces(at: _StoryAt, d_index: int) -> _DirectionPieces | None:
-        """The straight pieces of wall of story ``at`` facing direction ``d_index``, from its
-        DBSCAN segments (``None`` where it has too few faces or no segment)."""
-        story, ceiling, raster, below = at.story, at.ceiling, at.raster, at.below
+
+    def direction_pieces(
+        story: Story, ceiling: float | None, raster: StoryRaster, below: list[dict], in_story: np.ndarray, half: FloatArray, d_index: int
+    ) -> _DirectionPieces | None:
+        """The straight pieces of wall of ``story`` (its scanned ``ceiling``, None where the
+        walls stop short of it; ``below``: the walls of the story below that reach its ceiling;
+        ``in_story``: which faces or pieces are its wall evidence; ``half``: the DBSCAN box's half
+        extents) facing direction ``d_index``, from its DBSCAN segments (``None`` where it has too
+        few faces or no segment)."""
         d = dirs[d_index]
         n3 = np.array([d[0], 0.0, d[1]])
         t3 = np.array([-d[1], 0.0, d[0]])
-        idx = np.flatnonzero(at.in_story & facing[d_index])
+        idx = np.flatnonzero(in_story & facing[d_index])
         if len(idx) < params.min_points:
             return None
         c = centroids[idx]
         pts = np.c_[c @ t3, c @ n3, c[:, 1]]
-        labels, _ = box_dbscan(pts, at.half, params.min_points)
+        labels, _ = box_dbscan(pts, half, params.min_points)
         k = int(labels.max()) + 1
         if k == 0:
             return None
@@ -1298,56 +1291,52 @@ def find_flat_walls(mesh: Mesh, orientation: Orientation, params: WallParams | N
     seg_kept: list[bool] = []
     rows: list[dict] = []
     below: list[dict] = []  # walls of the story below that reach its ceiling
-    # each story's directions searched in threads (meshplan.geometry.SEARCH_THREADS)
-    with ThreadPoolExecutor(search_threads(len(dirs))) as pool:
-        for story in orientation.stories:
-            ceiling = story.ceiling if story.ceiling_found else None
-            story_faces = np.flatnonzero(face_story == story.index)
-            # the story's faces (the scan's own arrays when they are all of them: a single story's
-            # corners copied were 216 MB at 3M faces, twice)
-            story_tri, story_normals = (tri, normals) if len(story_faces) == len(tri) else (tri[story_faces], normals[story_faces])
-            if ceiling is not None and _walls_short_of(story_tri, story_normals, story.floor, ceiling):
-                # the ceiling was scanned but no wall up to it (a user who looked up in the middle
-                # of the rooms only): the walls' tops are lost in the band under it, as in a story
-                # without a ceiling, which is what they are judged against (the ceiling and what
-                # rounds into it, the band WALLS_SHORT_M under it, left out of the rasters)
-                story_faces = story_faces[centroids[story_faces, 1] <= ceiling - WALLS_SHORT_M]
-                story_tri, story_normals = tri[story_faces], normals[story_faces]
-                ceiling = None
-            # without a scanned ceiling the assumed one bounds nothing: the story's faces go up to
-            # its top boundary (the next story, or the top of the scan)
-            story_top = story.ceiling if ceiling is not None else story.top
-            in_story = (face_story == story.index) & ~objects & (centroids[:, 1] > story.floor) & (centroids[:, 1] < story_top)
-            raster = story_raster(story_tri, story_normals, story.floor, ceiling)
-            height = params.box_height_m or story.height
-            half = np.array([params.box_length_m / 2, params.box_depth_m / 2, height / 2])
-            # the directions' pieces numbered in the directions' order, as one thread finds them
-            found: list[dict] = []
-            at = _StoryAt(story, ceiling, raster, below, in_story, half)
-            for part in pool.map(direction_pieces, [at] * len(dirs), range(len(dirs))):
-                if part is None:
-                    continue
-                keep = np.zeros(len(part.present), dtype=bool)
-                keep[: part.n_pieces] = True
-                # the sub-segments that exist, numbered after the segments so far
-                first = len(seg_story)
-                piece_segment[part.faces] = (np.cumsum(part.present) - 1 + first)[part.sub]
-                seg_story.extend([story.index] * int(part.present.sum()))
-                seg_kept.extend(keep[part.present].tolist())
-                for row in part.rows:
-                    row["segments"] = [row["segments"][0] + first]
-                found.extend(part.rows)
-            found = _split_at_crossings(_merge(found, params.box_depth_m / 2, params.merge_gap_m), params.min_wall_length_m)
-            free = (
-                _free_standing(found, raster, story.floor, ceiling, params) | _pilasters(found, params, raster) | _wall_cores(found, params)
-                | _outer_faces(found, raster, params)
-            )
-            for r in (r for r, f in zip(found, free) if f):
-                for sid in r["segments"]:
-                    seg_kept[sid] = False
-            found = [r for r, f in zip(found, free) if not f]
-            rows.extend(found)
-            below = [r for r in found if r["top"] >= story.ceiling - params.ceiling_reach_m]
+    for story in orientation.stories:
+        ceiling = story.ceiling if story.ceiling_found else None
+        story_faces = np.flatnonzero(face_story == story.index)
+        # the story's faces (the scan's own arrays when they are all of them: a single story's
+        # corners copied were 216 MB at 3M faces, twice)
+        story_tri, story_normals = (tri, normals) if len(story_faces) == len(tri) else (tri[story_faces], normals[story_faces])
+        if ceiling is not None and _walls_short_of(story_tri, story_normals, story.floor, ceiling):
+            # the ceiling was scanned but no wall up to it (a user who looked up in the middle
+            # of the rooms only): the walls' tops are lost in the band under it, as in a story
+            # without a ceiling, which is what they are judged against (the ceiling and what
+            # rounds into it, the band WALLS_SHORT_M under it, left out of the rasters)
+            story_faces = story_faces[centroids[story_faces, 1] <= ceiling - WALLS_SHORT_M]
+            story_tri, story_normals = tri[story_faces], normals[story_faces]
+            ceiling = None
+        # without a scanned ceiling the assumed one bounds nothing: the story's faces go up to
+        # its top boundary (the next story, or the top of the scan)
+        story_top = story.ceiling if ceiling is not None else story.top
+        in_story = (face_story == story.index) & ~objects & (centroids[:, 1] > story.floor) & (centroids[:, 1] < story_top)
+        raster = story_raster(story_tri, story_normals, story.floor, ceiling)
+        height = params.box_height_m or story.height
+        half = np.array([params.box_length_m / 2, params.box_depth_m / 2, height / 2])
+        # the directions searched in threads (meshplan.geometry.SEARCH_THREADS), their pieces
+        # numbered in the directions' order, as one thread finds them
+        found: list[dict] = []
+        for part in in_threads(partial(direction_pieces, story, ceiling, raster, below, in_story, half), len(dirs)):
+            if part is None:
+                continue
+            # the sub-segments that exist, numbered after the segments so far (the pieces kept)
+            first = len(seg_story)
+            piece_segment[part.faces] = (np.cumsum(part.present) - 1 + first)[part.sub]
+            seg_story.extend([story.index] * int(part.present.sum()))
+            seg_kept.extend((np.flatnonzero(part.present) < part.n_pieces).tolist())
+            for row in part.rows:
+                row["segments"] = [row["segments"][0] + first]
+            found.extend(part.rows)
+        found = _split_at_crossings(_merge(found, params.box_depth_m / 2, params.merge_gap_m), params.min_wall_length_m)
+        free = (
+            _free_standing(found, raster, story.floor, ceiling, params) | _pilasters(found, params, raster) | _wall_cores(found, params)
+            | _outer_faces(found, raster, params)
+        )
+        for r in (r for r, f in zip(found, free) if f):
+            for sid in r["segments"]:
+                seg_kept[sid] = False
+        found = [r for r, f in zip(found, free) if not f]
+        rows.extend(found)
+        below = [r for r in found if r["top"] >= story.ceiling - params.ceiling_reach_m]
     rows.sort(key=lambda r: (r["story"], r["direction"], r["offset"], r["u_min"]))
     segment_wall = np.full(len(seg_story), -1, dtype=np.int64)
     for w, r in enumerate(rows):
