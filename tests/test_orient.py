@@ -315,7 +315,11 @@ def test_a_very_large_mesh_is_estimated_on_an_even_sample(monkeypatch):
     assert sample.area == pytest.approx(scan.mesh.area, rel=0.03)  # each face stands for k
     assert orientation.estimation_sample(scan.mesh, scan.mesh.n_faces) is scan.mesh
     monkeypatch.setattr(orientation, "ESTIMATE_MAX_FACES", scan.mesh.n_faces // 7)
+    estimated_on = []
+    estimate = orientation.estimate_gravity
+    monkeypatch.setattr(orientation, "estimate_gravity", lambda m, *a, **k: estimated_on.append(m.n_faces) or estimate(m, *a, **k))
     part = orient(scan.mesh)
+    assert estimated_on == [sample.n_faces]  # the limit read when orienting, not when defined
     assert angle_deg(part.gravity.up, full.gravity.up) < 0.02
     assert angle_deg(part.rotation @ [1.0, 0.0, 0.0], full.rotation @ [1.0, 0.0, 0.0]) < 0.05
     for a, b in zip(part.stories, full.stories, strict=True):
