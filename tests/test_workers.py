@@ -356,3 +356,30 @@ def test_ctrl_c_before_the_run_writes_ends_it_whatever_catches_it(tmp_path):
     assert (out.returncode, out.stdout, out.stderr) == (130, "", "error: interrupted; nothing was written\n")
     out = subprocess.run([sys.executable, "-c", _WRITING, str(tmp_path / "out")], capture_output=True, text=True, timeout=120)
     assert (out.returncode, out.stdout.strip(), out.stderr) == (0, "cleaned up: []", "")
+
+
+def test_the_processs_objects_are_set_aside_from_the_collector_while_workers_share_them(apartment, tmp_path, monkeypatch):
+    """While a run's workers share its memory, the objects the run held when it forked them are
+    frozen (``gc.freeze``: no collection goes over them, nor writes to the pages the workers
+    share); after the run, failed or not, they are collected as before. A run without workers
+    freezes nothing."""
+    import gc
+
+    import meshplan
+    import meshplan.export as export
+    from meshplan.export import RenderPool
+
+    assert gc.get_freeze_count() == 0
+    seen: list[int] = []
+    meshplan.run(apartment, output=tmp_path / "out", progress=lambda stage, what: seen.append(gc.get_freeze_count()))
+    assert seen and min(seen) > 10_000  # numpy's, scipy's, numba's objects, and meshplan's own
+    assert gc.get_freeze_count() == 0
+    with pytest.raises(RuntimeError), RenderPool(2) as pool:
+        assert pool.executor is not None and gc.get_freeze_count() > 10_000
+        raise RuntimeError("a stage failed")
+    assert gc.get_freeze_count() == 0
+    with RenderPool(1):  # no worker to share with
+        assert gc.get_freeze_count() == 0
+    monkeypatch.setattr(export, "FROZEN_DURING_RUN", False)
+    with RenderPool(2) as pool:
+        assert pool.executor is not None and gc.get_freeze_count() == 0
