@@ -1,5 +1,5 @@
 """The plans' rasters: drawn without matplotlib's resampling (:mod:`meshplan.render.raster`)
-yet byte for byte as matplotlib draws them, and counted per slice with bit sets
+yet byte for byte as matplotlib draws them, and counted per slice in one compiled pass
 (:func:`meshplan.render.sheet.rasterize_segments`) as by sorting the (pixel, slice) pairs."""
 
 from __future__ import annotations

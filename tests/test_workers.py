@@ -383,3 +383,28 @@ def test_the_processs_objects_are_set_aside_from_the_collector_while_workers_sha
     monkeypatch.setattr(export, "FROZEN_DURING_RUN", False)
     with RenderPool(2) as pool:
         assert pool.executor is not None and gc.get_freeze_count() == 0
+
+
+_INHERITS = """
+import sys
+from meshplan.export import RenderPool
+from meshplan.render.sheet import Sheet, rasterize_segments
+import numpy as np
+loaded = "numba.np.arraymath" in sys.modules  # imported by numba's first kernel call
+with RenderPool(2) as pool:
+    assert pool.executor is not None
+    print(loaded, pool.executor.submit(eval, "'numba.np.arraymath' in __import__('sys').modules").result())
+    segments = np.array([[[0.0, 0.0], [1.0, 0.5]]])
+    got = pool.executor.submit(rasterize_segments, segments, np.zeros(1, int), Sheet(0.0, 2.0, 0.0, 2.0, 10, 10)).result()
+    print(int(got.sum()))
+"""
+
+
+def test_the_worker_inherits_numbas_machinery_for_its_rasters():
+    """The run loads numba's machinery before it forks its worker (``load_machinery``), so
+    that the worker's pen-and-ink rasters (a compiled kernel) do not load it again: in a fresh
+    process it is not loaded before the pool starts, and the worker has it before its first
+    kernel."""
+    out = subprocess.run([sys.executable, "-c", _INHERITS], capture_output=True, text=True, timeout=120, check=True).stdout.split()
+    assert out[:2] == ["False", "True"]
+    assert int(out[2]) > 0  # the worker's raster counts the segment's pixels

@@ -166,6 +166,15 @@ def dbscan_labels(p, core, start, neigh, roots):  # pragma: no cover - compiled
     return labels
 
 
+def load_machinery() -> None:
+    """Load numba's machinery for compiled code now: a process's first kernel call (any kernel)
+    imports and registers numba's implementations, scipy.linalg among them (0.15-0.2 s); each
+    kernel after it only loads its own code from the cache (a few ms). A run does so before it
+    forks its drawing worker, so that the worker, whose pen-and-ink raster is a kernel
+    (:func:`count_levels`), inherits it."""
+    scatter_max(np.zeros(1), np.zeros(1, dtype=np.int64), np.zeros(1))
+
+
 @njit(cache=True, nogil=True)
 def scatter_max(out, idx, values):  # pragma: no cover - compiled
     """``np.maximum.at(out, idx, values)`` (NaN values propagate, as there), in one pass."""
@@ -184,6 +193,32 @@ def scatter_min(out, idx, values):  # pragma: no cover - compiled
         v = values[j]
         if v < out[i] or v != v:
             out[i] = v
+
+
+@njit(cache=True, nogil=True)
+def count_levels(a, d, n, level, order, rows, cols):  # pragma: no cover - compiled
+    """``(rows * cols,)`` how many distinct levels' segments cross each pixel.
+
+    Segment ``i`` runs from ``a[i]`` by ``d[i]`` (pixels, x then y) in ``n[i]`` samples, at
+    ``t = k / max(n[i] - 1, 1)``, each in the pixel its coordinates truncate to, and ``order``
+    takes the segments level by level: a pixel counts a level when it is first met at it.
+    """
+    counts = np.zeros(rows * cols, dtype=np.int32)
+    last = np.full(rows * cols, -1, dtype=np.int32)
+    for j in range(order.shape[0]):
+        i = order[j]
+        lv = level[i]
+        m = max(n[i] - 1, 1)
+        for k in range(n[i]):
+            t = k / m
+            c = int(a[i, 0] + d[i, 0] * t)
+            r = int(a[i, 1] + d[i, 1] * t)
+            if c >= 0 and c < cols and r >= 0 and r < rows:
+                px = r * cols + c
+                if last[px] != lv:
+                    last[px] = lv
+                    counts[px] += 1
+    return counts
 
 
 @njit(cache=True, nogil=True)
