@@ -576,9 +576,8 @@ def rasterize_segments(segments: np.ndarray, level: np.ndarray, sheet: Sheet) ->
     its segments meet. The samples are walked slice by slice in one compiled pass
     (:func:`meshplan._kernels.count_levels`), a pixel counting a slice when first met at it:
     the numpy version made the 1.6 million samples of the benchmark apartment as eight arrays
-    of 13 MB and set a bit per slice in a 25 MB word array for each 64 slices (0.09-0.17 s of
-    the pen-and-ink plan's 0.35-0.45 s, its memory traffic slowing the stages computed beside
-    it on the other core); the same counts.
+    of 13 MB and set a bit per slice in a 25 MB word array for each 64 slices: 0.09-0.17 s of
+    the pen-and-ink plan's 0.35-0.45 s, against 0.04 s; the same counts.
     """
     from .._kernels import count_levels
 
