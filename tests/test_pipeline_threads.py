@@ -40,7 +40,6 @@ def test_the_stages_run_with_one_blas_thread(monkeypatch):
     assert seen == [{1}]
 
 
-
 def _threads_seen(monkeypatch, module, name: str) -> set[int]:
     """The threads that call ``module.name`` from now on (each call a little slow, so that
     every thread of a pool gets parts however fast the first is)."""

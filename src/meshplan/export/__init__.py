@@ -574,11 +574,10 @@ class _EitherSide:
                 log.debug("the DXF job stays in the main process (%s)", exc)
 
     def files(self) -> dict[str, bytes]:
-        """The job's files, made here or the worker's."""
+        """The job's files: the worker's when it was handed over, else made here (:func:`_result`
+        without a future)."""
         with self._lock:
-            mine, self._taken, future = not self._taken, True, self.future
-        if mine:
-            return _call(self.job)
+            self._taken, future = True, self.future
         return _result(self.job, future, self.pool)
 
 

@@ -1138,16 +1138,15 @@ def _front_at(raster: StoryRaster, tip: FloatArray, tangent: FloatArray, top: fl
 @dataclass(frozen=True, eq=False)
 class _DirectionPieces:
     """The pieces of wall :func:`find_flat_walls` found facing one direction of a story: the
-    ``faces`` (or their pieces) in a DBSCAN segment and the sub-segment of each (``sub``: the
-    straight pieces first, then the other runs, then the rest of each segment), which
-    sub-segments have faces (``present``), how many are pieces, and the pieces' rows, each
-    naming its sub-segment among those present (numbered from 0 here, after the segments so far
-    once joined)."""
+    ``faces`` (or their pieces) in a DBSCAN segment and the sub-segment of each (``segment``:
+    the sub-segments that have faces numbered from 0, the straight pieces first, then the other
+    runs, then the rest of each DBSCAN segment), whether each of those sub-segments is a piece
+    (``kept``), and the pieces' rows, each naming its sub-segment (numbered from 0 here, after
+    the segments so far once joined)."""
 
     faces: IntArray
-    sub: IntArray
-    present: np.ndarray
-    n_pieces: int
+    segment: IntArray
+    kept: np.ndarray
     rows: list[dict]
 
 
@@ -1284,7 +1283,7 @@ def find_flat_walls(mesh: Mesh, orientation: Orientation, params: WallParams | N
             for j in range(n_pieces)
             if present[j]
         ]
-        return _DirectionPieces(fidx, sub, present, n_pieces, rows)
+        return _DirectionPieces(fidx, local[sub], np.flatnonzero(present) < n_pieces, rows)
 
     piece_segment = np.full(len(tri), -1, dtype=np.int64)
     seg_story: list[int] = []
@@ -1320,9 +1319,9 @@ def find_flat_walls(mesh: Mesh, orientation: Orientation, params: WallParams | N
                 continue
             # the sub-segments that exist, numbered after the segments so far (the pieces kept)
             first = len(seg_story)
-            piece_segment[part.faces] = (np.cumsum(part.present) - 1 + first)[part.sub]
-            seg_story.extend([story.index] * int(part.present.sum()))
-            seg_kept.extend((np.flatnonzero(part.present) < part.n_pieces).tolist())
+            piece_segment[part.faces] = part.segment + first
+            seg_story.extend([story.index] * len(part.kept))
+            seg_kept.extend(part.kept.tolist())
             for row in part.rows:
                 row["segments"] = [row["segments"][0] + first]
             found.extend(part.rows)
