@@ -115,3 +115,55 @@ def test_the_command_keeps_numpy_from_asking_for_huge_pages() -> None:
     # the user's own setting is left alone
     out = subprocess.run([sys.executable, "-c", _PAGES_CHILD], capture_output=True, text=True, check=True, env={**env, "NUMPY_MADVISE_HUGEPAGE": "1"})
     assert out.stdout.strip() == "True"
+
+
+def test_the_collector_paused_and_resumed_once() -> None:
+    import gc
+
+    from meshplan import _memory
+
+    assert gc.isenabled()
+    try:
+        assert _memory.pause_collector()
+        assert not gc.isenabled()
+        assert not _memory.pause_collector()  # already paused: nothing to do
+        frozen = gc.get_freeze_count()
+        assert _memory.resume_collector()
+        assert gc.isenabled() and gc.get_freeze_count() > frozen  # what was loaded set aside
+        assert not _memory.resume_collector()  # once
+        # a collector the user turned off stays off
+        gc.disable()
+        assert not _memory.pause_collector()
+        assert not _memory.resume_collector() and not gc.isenabled()
+    finally:
+        gc.enable()
+        gc.unfreeze()
+
+
+_COLLECTOR_CHILD = """
+import gc, sys
+sys.argv[0] = "meshplan"
+import meshplan.cli as cli  # loaded as the program
+print(gc.isenabled())
+import meshplan.api as api
+def run(*args, **kwargs):  # where the run would start: what is loaded, and the collector
+    print(gc.isenabled(), gc.get_freeze_count() > 50_000, "numba.np.arraymath" in sys.modules)
+    raise SystemExit(0)
+api.run = run
+cli.main(sys.argv[1:])
+print(gc.isenabled())
+"""
+
+
+def test_the_program_loads_its_libraries_with_the_collector_paused(tmp_path) -> None:
+    # the program loads typer, numpy, scipy and numba's machinery (its first stage's) with the
+    # collector off, then freezes them and turns it back on before the run starts
+    scan = tmp_path / "scan.ply"
+    scan.write_text("ply\n")
+    argv = ["run", str(scan), "-o", str(tmp_path / "out"), "--quiet"]
+    out = subprocess.run([sys.executable, "-c", _COLLECTOR_CHILD, *argv], capture_output=True, text=True, check=True)
+    assert out.stdout.split() == ["False", "True", "True", "True"]
+    # another command: the collector is back on when it starts
+    out = subprocess.run([sys.executable, "-c", _COLLECTOR_CHILD, "schema"], capture_output=True, text=True, check=True)
+    lines = out.stdout.splitlines()
+    assert lines[0] == "False" and lines[-1] == "True"

@@ -1,4 +1,5 @@
-"""How the ``meshplan`` process's C allocator treats the memory a run frees.
+"""How the ``meshplan`` process's C allocator treats the memory a run frees, and when Python's
+garbage collector runs.
 
 A run makes and drops thousands of arrays of a few megabytes (a 300k-face scan's per-face
 arrays are 1-7 MB, the pen-and-ink raster's samples 13 MB). glibc's ``malloc`` maps each
@@ -25,10 +26,21 @@ without 2.8-3.6 s, and ran in 14.3-15.4 s against 12.7-15.6 s (the 1M-face scan 
 against 1.1-1.2 s of system time, 5.8-8.1 s against 5.5-6.6 s; runs alternated, 2-4 each);
 at 300k faces the two do not differ beyond the noise. The small pages' extra TLB misses cost
 less CPU (0.3-0.8 s of user time at 3M faces) than the system time saved.
+
+:func:`pause_collector` turns Python's cyclic garbage collector off while the program loads its
+libraries (typer, numpy, scipy, numba and its compiler's machinery: about 120,000 objects, every
+one of them kept for the life of the process), and :func:`resume_collector` sets what was loaded
+aside for good (``gc.freeze``) and turns the collector back on before the run makes its first
+array. Loading, the collector ran about 290 times, each full collection over every object loaded
+so far: 0.07-0.09 s of the 0.6-0.7 s a fresh 300k-face run spends before it reads the scan, to
+free 1,300 objects (a few hundred kB). Loaded with the collector off: 0.54 s instead of 0.68 s
+(medians of six alternated fresh processes), the run 0.1 s sooner. Frozen, those objects are no
+longer walked by the run's own collections either.
 """
 
 from __future__ import annotations
 
+import gc
 import os
 import sys
 
@@ -56,6 +68,9 @@ _ARENA_VARIABLE = "MALLOC_ARENA_MAX"
 HUGEPAGE_VARIABLE = "NUMPY_MADVISE_HUGEPAGE"
 #: ``mallopt`` parameters (glibc's ``malloc.h``).
 _M_TRIM_THRESHOLD, _M_MMAP_THRESHOLD, _M_ARENA_MAX = -1, -3, -8
+#: Whether :func:`pause_collector` turned the collector off (and :func:`resume_collector` has
+#: not yet turned it back on).
+_paused = False
 
 
 def keep_freed_memory() -> bool:
@@ -100,4 +115,41 @@ def small_pages() -> bool:
     if not sys.platform.startswith("linux") or HUGEPAGE_VARIABLE in os.environ:
         return False
     os.environ[HUGEPAGE_VARIABLE] = "0"
+    return True
+
+
+def pause_collector() -> bool:
+    """Turn Python's cyclic garbage collector off while the program loads its libraries (see the
+    module), until :func:`resume_collector`. A collector the program finds off (a user's
+    ``gc.disable()``) is left so.
+
+    Returns
+    -------
+    bool
+        Whether the collector was on and is now paused.
+    """
+    global _paused
+    if _paused or not gc.isenabled():
+        return False
+    gc.disable()
+    _paused = True
+    return True
+
+
+def resume_collector() -> bool:
+    """Set every object loaded so far aside from the collector for good (``gc.freeze``: they live
+    as long as the process) and turn the collector back on, if :func:`pause_collector` paused
+    it; otherwise do nothing. Safe to call more than once.
+
+    Returns
+    -------
+    bool
+        Whether the collector was resumed by this call.
+    """
+    global _paused
+    if not _paused:
+        return False
+    _paused = False
+    gc.freeze()
+    gc.enable()
     return True

@@ -37,10 +37,11 @@ if _STARTING:
 
     signal.signal(signal.SIGINT, exit_at_once)
 if _PROGRAM:
-    from ._memory import keep_freed_memory, small_pages
+    from ._memory import keep_freed_memory, pause_collector, small_pages
 
     keep_freed_memory()  # before numpy allocates: every array of the run reuses freed memory
     small_pages()  # before numpy loads: its large arrays in small pages (see meshplan._memory)
+    pause_collector()  # until the libraries are loaded (resume_collector; see meshplan._memory)
 
 import typer  # noqa: E402 - after the handler above: this import takes a while
 
@@ -246,9 +247,20 @@ def _run_keywords(options: dict[str, Any]) -> dict[str, Any]:
 
 @app.callback()
 def _main(
+    ctx: typer.Context,
     version: bool = typer.Option(False, "--version", callback=_version, is_eager=True, help="Print the version and exit."),
 ) -> None:
     """meshplan: scanned mesh in, oriented model and floor plans out."""
+    if ctx.invoked_subcommand != "run":  # run resumes it once it has loaded its libraries
+        _resume_collector()
+
+
+def _resume_collector() -> None:
+    """The garbage collector back on, if the program paused it while loading
+    (:func:`meshplan._memory.pause_collector`)."""
+    from ._memory import resume_collector
+
+    resume_collector()
 
 
 def _parse_set(items: list[str]) -> dict[str, Any]:
@@ -305,6 +317,12 @@ def run(
     if _STARTING:  # the program: Ctrl-C ends the run at once until it writes (meshplan._ctrl_c)
         exit_at_once_from_now()
     from . import api
+    from ._kernels import load_machinery
+
+    # numba's compiler machinery, which the run's first stage loads anyway, loaded now: with
+    # the libraries, while the collector is paused (meshplan._memory), then the collector back
+    load_machinery()
+    _resume_collector()
     _setup_logging(verbose, quiet)
     params = _run_keywords(options)
     out = output if output is not None else api.default_output_dir(scan)
