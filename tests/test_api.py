@@ -10,7 +10,6 @@ from pathlib import Path
 
 import pytest
 
-import meshplan
 from meshplan.cli import main
 from meshplan.errors import MeshplanError
 from meshplan.export.synth import write_synthetic

@@ -6,14 +6,13 @@ import numpy as np
 import pytest
 from sklearn.cluster import DBSCAN
 
+from conftest import angle_deg
 from meshplan.errors import ParameterError
+from meshplan.geometry import Annotations, Mesh, homogeneous, is_rigid, rotation_about_y, rotation_between
 from meshplan.orient.params import PAPER_TRIM_SCHEDULE_DEG
-from meshplan.geometry import Annotations, Mesh, is_rigid, rotation_about_y, rotation_between, homogeneous
 from meshplan.slicing import plane_heights, slice_mesh
 from meshplan.sphere import axial_peaks, to_spherical, trimmed_spherical_kmeans
 from meshplan.walls import BoxDBSCAN, box_dbscan
-
-from conftest import angle_deg
 
 
 def random_rotation(rng) -> np.ndarray:

@@ -385,7 +385,6 @@ def test_the_truth_levelling_levels_a_tilted_room_on_its_floor():
     """The truth's levelling (its README's plane fit to the floor) finds the floor's normal of a
     room tilted by 1.5 degrees, from the file's +y, and ignores the ceiling and a table top."""
     from conftest import angle_deg, box_room
-
     from meshplan.evaluate_real import truth_levelling
     from meshplan.geometry import Mesh
 

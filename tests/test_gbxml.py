@@ -184,6 +184,30 @@ def test_presets_energy_model(computed, preset, seed, kw, tmp_path):
         assert numbers["shared"] > 0
 
 
+def test_a_results_energy_model_is_made_once(computed, monkeypatch):
+    # plan.json, the report page and the summary each ask for it: one model per result, made
+    # anew for another result (here: another north), and gone with its result
+    import gc
+
+    from meshplan.export import gbxml
+
+    _, result = computed("apartment", 1)
+    made: list[object] = []
+    real = gbxml._energy_model
+    monkeypatch.setattr(gbxml, "_energy_model", lambda r: made.append(r) or real(r))
+    first = energy_model(result)
+    assert energy_model(result) is first and envelope_summary(result) == envelope_summary(result)
+    turned = dataclasses.replace(result, options=dataclasses.replace(result.options, export=ExportParams(north_deg=90.0)))
+    assert energy_model(turned) is not first and energy_model(turned).north_deg != first.north_deg
+    assert made[-1] is turned and len(made) <= 2  # the first result's, unless made before
+    assert turned in gbxml._MODELS and result in gbxml._MODELS
+    held = len(gbxml._MODELS)
+    del turned
+    made.clear()
+    gc.collect()
+    assert len(gbxml._MODELS) == held - 1 and result in gbxml._MODELS
+
+
 def test_envelope_orientations_follow_north(computed):
     _, result = computed("apartment", 1)
     base = envelope_summary(result)

@@ -8,13 +8,12 @@ import numpy as np
 import pytest
 import trimesh
 
+from conftest import box_room
 from meshplan.errors import AnnotationError, InputError, ParameterError
+from meshplan.export.synth import obj_text
 from meshplan.geometry import Mesh
 from meshplan.io import load_annotations, load_mesh
 from meshplan.io.annotations import annotations_document, parse_annotations
-from meshplan.export.synth import obj_text
-
-from conftest import box_room
 
 
 @pytest.fixture(scope="module")

@@ -5,13 +5,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from conftest import REAL_SCANS, angle_deg, box_room, real_scan
 from meshplan.errors import GeometryError
 from meshplan.geometry import Mesh, homogeneous, is_rigid
 from meshplan.io import load_mesh
 from meshplan.orient import OrientParams, orient
 from meshplan.synthetic import SynthParams, generate
-
-from conftest import REAL_SCANS, angle_deg, box_room, real_scan
 
 
 def errors(orientation, truth) -> tuple[float, float, list[float]]:

@@ -7,17 +7,14 @@ import json
 import numpy as np
 import pytest
 
-from meshplan.evaluate import evaluate, wall_scores, mapped_truth_walls
+from conftest import box_room
+from meshplan.evaluate import evaluate, mapped_truth_walls, wall_scores
 from meshplan.export import plan_document, plan_schema
 from meshplan.geometry import Mesh
 from meshplan.io import LoadStats
 from meshplan.options import RunOptions
-from meshplan.orient import OrientParams, orient
 from meshplan.pipeline import compute
 from meshplan.slicing import plane_heights, slice_mesh
-from meshplan.walls import find_flat_walls
-
-from conftest import box_room
 
 pytestmark = pytest.mark.slow  # whole runs of meshplan: not part of the unit layer (-m "not slow")
 
@@ -184,6 +181,7 @@ def test_annotations_follow_the_mesh(computed):
 def test_files_are_written_and_open(tmp_path):
     import ezdxf
     import trimesh
+
     from meshplan import run
     from meshplan.export.synth import write_synthetic
     from meshplan.synthetic import SynthParams, generate
@@ -205,7 +203,7 @@ def test_files_are_written_and_open(tmp_path):
     # DXF: named layers, metres, walls where plan.json says
     dxf = ezdxf.readfile(out / "drafting-0.dxf")
     assert dxf.units == ezdxf.units.M
-    layers = {l.dxf.name for l in dxf.layers}
+    layers = {layer.dxf.name for layer in dxf.layers}
     assert {"WALLS", "SLICES", "ANNOTATIONS", "TEXT", "ROOMS", "DIMENSIONS"} <= layers
     lines = [e for e in dxf.modelspace() if e.dxftype() == "LINE" and e.dxf.layer == "WALLS"]
     long_lines = [e for e in lines if (e.dxf.end - e.dxf.start).magnitude > 0.3]

@@ -6,9 +6,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import SCANS
 
 import meshplan
+from conftest import SCANS
 from meshplan.errors import GeometryError
 from meshplan.plausibility import HALL_MAX_M, STORY_MAX_M, STORY_MIN_M
 

@@ -16,6 +16,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from conftest import box_room
 from meshplan.cli import main
 from meshplan.errors import AnnotationError, MeshplanError
 from meshplan.geometry import Annotations, Mesh, homogeneous
@@ -24,8 +25,6 @@ from meshplan.io.annotations import parse_annotations
 from meshplan.options import RunOptions
 from meshplan.pipeline import compute
 from meshplan.synthetic import SynthParams, generate
-
-from conftest import box_room
 
 pytestmark = pytest.mark.slow  # whole runs of meshplan: not part of the unit layer (-m "not slow")
 

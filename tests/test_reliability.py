@@ -22,12 +22,11 @@ import pytest
 import trimesh
 
 import meshplan.export as export
+from conftest import box_room
 from meshplan.cli import main
 from meshplan.export.synth import write_synthetic
 from meshplan.io import atomic
 from meshplan.synthetic import SynthParams, generate
-
-from conftest import box_room
 
 pytestmark = pytest.mark.slow  # whole runs of meshplan: not part of the unit layer (-m "not slow")
 
@@ -303,7 +302,7 @@ def test_a_failure_while_drawing_or_writing_leaves_nothing(tmp_path, good, capsy
     if failure == "publish":
         monkeypatch.setattr(atomic, "_publish", publish)
     previous = tmp_path / "previous"
-    before = _previous_result(previous)
+    _previous_result(previous)  # the tree listed below holds it
     listing = _tree(tmp_path)
     for out in (["-o", str(tmp_path / "new" / "deeper" / "out")], ["-o", str(previous), "--force"]):
         code = main(["run", str(good), *out, "--quiet"])

@@ -104,6 +104,7 @@ def test_ifc_export(computed, tmp_path):
     ifcopenshell = pytest.importorskip("ifcopenshell")
     import ifcopenshell.util.element as element
     import ifcopenshell.util.placement as placement
+
     from meshplan.export.ifc import ifc_bytes
 
     _, result = computed("multistory", 1)

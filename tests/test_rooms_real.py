@@ -15,9 +15,9 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 import shapely
-from conftest import SHARED
 from shapely.geometry import LineString, Polygon
 
+from conftest import SHARED
 from meshplan.plan.closure import _corner_fills, close_walls, reach_walls, straighten
 from meshplan.plan.params import PlanParams
 from meshplan.plan.rooms import _open_rooms

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import json
-from functools import lru_cache
+from functools import cache
 
 import numpy as np
 import pytest
@@ -11,13 +11,13 @@ import pytest
 from meshplan.errors import ParameterError
 from meshplan.geometry import Mesh, is_rigid, transform_points
 from meshplan.io import annotations_document, parse_annotations
-from meshplan.synthetic import PRESETS, SURFACE_KINDS, SynthParams, SyntheticScan, generate
+from meshplan.synthetic import PRESETS, SURFACE_KINDS, SyntheticScan, SynthParams, generate
 
 KIND = {k: i for i, k in enumerate(SURFACE_KINDS)}
 COARSE = (0.15, 0.25)  # big triangles keep the tests fast
 
 
-@lru_cache(maxsize=None)
+@cache
 def scan(preset: str = "apartment", seed: int = 0, **kw) -> SyntheticScan:
     kw.setdefault("triangle_size_m", COARSE)
     return generate(preset=preset, seed=seed, **kw)
@@ -257,7 +257,7 @@ def test_openings_lie_on_their_walls_and_are_cut(preset):
         uu = (cc[:, [0, 2]] - s0) @ ((e0 - s0) / np.linalg.norm(e0 - s0))
         hole = (np.abs(uu - u) < o["width"] / 2 - 0.02) & (cc[:, 1] > o["bottom"] + 0.02) & (cc[:, 1] < o["top"] - 0.02)
         assert not hole.any()
-    for label, ops in labels.items():  # interior doors: once per side, same place
+    for ops in labels.values():  # interior doors: once per side, same place
         assert len(ops) in (1, 2)
         if len(ops) == 2:
             assert not ops[0]["exterior"] and ops[0]["kind"] == "door"

@@ -15,10 +15,10 @@ from typing import Any, ClassVar
 import numpy as np
 import pytest
 import trimesh
-from conftest import box_room
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from conftest import box_room
 from meshplan.cli import main
 from meshplan.errors import AnnotationError, MeshplanError, ParameterError
 from meshplan.geometry import Annotations

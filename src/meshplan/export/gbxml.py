@@ -59,6 +59,7 @@ surface orientation rules above shared by every surface kind.
 from __future__ import annotations
 
 import math
+import weakref
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
@@ -523,8 +524,17 @@ class _Builder:
         )
 
 
+#: The energy model of each result still alive: plan.json's envelope, the report page's (its
+#: plan document and its energy layers) and the command's summary each ask for it, four times a
+#: run (9 ms each at 300k faces); a result is frozen, so its model is made once. Keyed weakly:
+#: a result's entry goes with it.
+_MODELS: weakref.WeakKeyDictionary[Result, EnergyModel] = weakref.WeakKeyDictionary()
+
+
 def energy_model(result: Result) -> EnergyModel:
     """The energy model (spaces, surfaces, openings) of a result; see the module docstring.
+    Made once per result (:data:`_MODELS`): every call with the same result returns the same
+    model, which is not to be changed.
 
     Parameters
     ----------
@@ -535,6 +545,14 @@ def energy_model(result: Result) -> EnergyModel:
     -------
     EnergyModel
     """
+    model = _MODELS.get(result)
+    if model is None:
+        model = _MODELS[result] = _energy_model(result)
+    return model
+
+
+def _energy_model(result: Result) -> EnergyModel:
+    """:func:`energy_model` itself, made anew."""
     from shapely.geometry import Polygon
     from shapely.geometry.polygon import orient
 
