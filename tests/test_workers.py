@@ -362,7 +362,7 @@ def test_the_processs_objects_are_set_aside_from_the_collector_while_workers_sha
     """While a run's workers share its memory, the objects the run held when it forked them are
     frozen (``gc.freeze``: no collection goes over them, nor writes to the pages the workers
     share); after the run, failed or not, they are collected as before. A run without workers
-    freezes nothing."""
+    freezes nothing, nor does one whose process has objects frozen already (it thaws none)."""
     import gc
 
     import meshplan
@@ -380,6 +380,16 @@ def test_the_processs_objects_are_set_aside_from_the_collector_while_workers_sha
     assert gc.get_freeze_count() == 0
     with RenderPool(1):  # no worker to share with
         assert gc.get_freeze_count() == 0
+    # objects frozen already (the program's libraries, or a caller's own) stay frozen after a
+    # run: the run does not thaw what it did not freeze
+    gc.freeze()
+    try:
+        held = gc.get_freeze_count()  # (frozen objects freed meanwhile leave the count)
+        with RenderPool(2) as pool:
+            assert pool.executor is not None and gc.get_freeze_count() <= held
+        assert gc.get_freeze_count() > held // 2  # not thawed (that leaves none)
+    finally:
+        gc.unfreeze()
     monkeypatch.setattr(export, "FROZEN_DURING_RUN", False)
     with RenderPool(2) as pool:
         assert pool.executor is not None and gc.get_freeze_count() == 0

@@ -375,7 +375,10 @@ def _processes(params) -> int:
 #: yet each full collection of the run went over all of them, and wrote to their pages, which a
 #: forked worker shares until either writes (each write then copies the page). On the 300k-face
 #: apartment the run's collections took 0.05 s instead of 0.08 s (the full one 0.01 s instead
-#: of 0.05 s). They are collected as before once the run ends (``gc.unfreeze``).
+#: of 0.05 s). They are collected as before once the run ends (``gc.unfreeze``). Where objects
+#: are frozen already (the ``meshplan`` program froze its libraries once loaded,
+#: :func:`meshplan._memory.resume_collector`; or a caller its own), the run leaves the freezing
+#: to whoever froze them: it neither freezes nor thaws, which would thaw theirs too.
 FROZEN_DURING_RUN = True
 
 
@@ -422,7 +425,7 @@ class RenderPool:
             blocked = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
             # the objects the process holds now (the libraries': some 70,000) set aside from
             # the cyclic collector for the run (see FROZEN_DURING_RUN)
-            self.frozen = FROZEN_DURING_RUN
+            self.frozen = FROZEN_DURING_RUN and gc.get_freeze_count() == 0
             if self.frozen:
                 gc.freeze()
             try:
