@@ -475,6 +475,16 @@ class RenderPool:
                 proc.join(timeout=5.0)
             except (OSError, ValueError, AssertionError):  # pragma: no cover - already reaped
                 pass
+        # A worker killed while it sent a result leaves half a message in the result pipe, which
+        # the executor's manager thread then waits on for ever (this process holds the pipe's
+        # other write end), and the shutdown with it: the run hung on Ctrl-C or a failure while
+        # writing (seen once in the test suite). With that end closed the thread reads the end
+        # of the pipe, finds the pool broken and shuts it down. (The executor publishes neither
+        # its queues nor its workers; the names are CPython's since 3.3.)
+        if processes:
+            writer = getattr(getattr(self.executor, "_result_queue", None), "_writer", None)
+            if writer is not None:
+                writer.close()
 
 
 def _submit(pool: RenderPool, jobs: list[tuple]) -> list:
