@@ -400,10 +400,35 @@ def work_surface_in_front(raster: StoryRaster, start: FloatArray, end: FloatArra
     than :data:`FLOOR_CLEARANCE_M` and at most ``work_surface_m`` above ``floor``) in front of
     it, in the strip where a counter's or a desk's top meets a front (:data:`TOP_SEARCH_M`, on
     the side ``normal`` points to): a desk or a counter against the face."""
-    shelf = raster.shelf
     with np.errstate(invalid="ignore"):
-        work = np.where((shelf > floor + FLOOR_CLEARANCE_M) & (shelf <= floor + work_surface_m), 1.0, 0.0)
+        work = np.where(_at_work_height(raster.shelf, floor, work_surface_m), 1.0, 0.0)
     return _share_behind(raster, work, 0.5, start, end, -normal, TOP_SEARCH_M[0] - RASTER_M / 2, TOP_SEARCH_M[1])
+
+
+def work_surface_height(raster: StoryRaster, start: FloatArray, end: FloatArray, normal: FloatArray, floor: float, work_surface_m: float) -> FloatArray:
+    """Median height (m) of the level surfaces at work-surface height in front of each wall
+    face, in the strip of :func:`work_surface_in_front` (``nan`` where there is none): the top of
+    the desk or the counter against it."""
+    if not len(start):
+        return np.zeros(0)
+    step = RASTER_M / 2
+    along = (np.arange(8) + 0.5) / 8
+    across = np.arange(TOP_SEARCH_M[0] - RASTER_M / 2 + step, TOP_SEARCH_M[1] + 1e-9, step)
+    p = start[:, None, None, :] + along[None, :, None, None] * (end - start)[:, None, None, :]
+    p = p + across[None, None, :, None] * normal[:, None, None, :]
+    h = raster.sample(raster.shelf, p[..., 0], p[..., 1], np.nan).reshape(len(start), -1)
+    with np.errstate(invalid="ignore"):
+        h = np.where(_at_work_height(h, floor, work_surface_m), h, np.nan)
+    out = np.full(len(start), np.nan)
+    some = np.isfinite(h).any(axis=1)
+    out[some] = np.nanmedian(h[some], axis=1)
+    return out
+
+
+def _at_work_height(shelf: FloatArray, floor: float, work_surface_m: float) -> np.ndarray:
+    """Where a level surface lies at work-surface height: more than :data:`FLOOR_CLEARANCE_M`
+    and at most ``work_surface_m`` above ``floor`` (False where there is none, ``nan``)."""
+    return (shelf > floor + FLOOR_CLEARANCE_M) & (shelf <= floor + work_surface_m)
 
 
 def top_around(raster: StoryRaster, start: FloatArray, end: FloatArray, normal: FloatArray, thickness_m: float, depth_m: float) -> FloatArray:

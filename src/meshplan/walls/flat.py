@@ -67,6 +67,7 @@ from .evidence import (
     subdivide,
     top_around,
     top_attached,
+    work_surface_height,
     work_surface_in_front,
 )
 from .params import WallParams
@@ -848,8 +849,9 @@ def _free_standing(rows: list[dict], raster: StoryRaster, floor: float, ceiling:
     furniture, or a wall seen too little to tell that it bounds anything (a wall that meets a
     soffit or a lower ceiling has that ceiling scanned above it). Where the story has no
     ceiling, every wall's top may be lost below door height, and a fragment is dropped only
-    where a work surface stands against it along :data:`FLOOR_BEHIND_SHARE` of its length (a
-    desk's screen, a shelf's back, :func:`~meshplan.walls.evidence.work_surface_in_front`)."""
+    where a work surface stands against it along :data:`FLOOR_BEHIND_SHARE` of its length and
+    it rises no more than :data:`SCREEN_RISE_M` above that surface (a desk's screen, a shelf's
+    back, :func:`~meshplan.walls.evidence.work_surface_in_front`)."""
     n = len(rows)
     out = np.zeros(n, dtype=bool)
     if not n:
@@ -870,6 +872,7 @@ def _free_standing(rows: list[dict], raster: StoryRaster, floor: float, ceiling:
     length = np.linalg.norm(e - s, axis=1)
     around = top_around(raster, s, e, normals, params.max_wall_thickness_m, params.context_m)
     desk = work_surface_in_front(raster, s, e, normals, floor, params.max_work_surface_m)
+    desk_top = work_surface_height(raster, s, e, normals, floor, params.max_work_surface_m)
     if ceiling is not None:
         # the ceiling scanned on both sides of each piece, beyond a wall's thickness
         at_ceiling = ceiling - CEILING_TOLERANCE_M
@@ -901,12 +904,26 @@ def _free_standing(rows: list[dict], raster: StoryRaster, floor: float, ceiling:
             and all(rows[i]["top"] < floor + EDGE_WALL_MIN_TOP_M for i in members)
             and all(around[i] < rows[i]["top"] + CEILING_TOLERANCE_M for i in members)
             # without a ceiling, only where it rises out of a desk or a counter (a screen, a
-            # shelf's back): a work surface against it along most of its length
-            and (ceiling is not None or float((desk[members] * weights).sum()) >= FLOOR_BEHIND_SHARE)
+            # shelf's back): a work surface against it along most of its length, which it rises
+            # above by no more than a screen does (SCREEN_RISE_M); a wall seen higher above the
+            # desk against it goes on beyond what was scanned
+            and (
+                ceiling is not None
+                or (
+                    float((desk[members] * weights).sum()) >= FLOOR_BEHIND_SHARE
+                    and all(rows[i]["top"] <= desk_top[i] + SCREEN_RISE_M for i in members)
+                )
+            )
         )
         out[members] = (foot and (walked_round or pillar)) or fragment
     return out
 
+
+#: How far (m) a desk's screen or a low shelf's back rises above the work surface it stands on
+#: or against (:func:`_free_standing`): office screens rise 0.3-0.65 m above the desk; a piece
+#: of wall seen higher above the desk against it is a wall (a sparse headset scan sees the walls
+#: of a room without a ceiling to 1.2-1.8 m, the desks' screens of the real scans rise 0.5 m).
+SCREEN_RISE_M = 0.7
 
 #: Two wall faces facing each other closer than this (m) are one surface, not the two sides of
 #: a gap: the two faces of a thin box (a RoomPlan wall is one box 0.1 mm thick), each facing
