@@ -96,9 +96,11 @@ def manifest_ups(manifest: Path) -> dict[str, np.ndarray]:
     return ups
 
 
-def run_scan(scan: Path, out: Path) -> dict[str, Any]:
-    """``meshplan run`` on one scan in a fresh process: status, error line and wall-clock time."""
+def run_scan(scan: Path, out: Path, settings: tuple[str, ...] = ()) -> dict[str, Any]:
+    """``meshplan run`` on one scan in a fresh process (with ``--set`` of each of ``settings``,
+    ``NAME=VALUE``): status, error line and wall-clock time."""
     cmd = [sys.executable, "-m", "meshplan", "run", str(scan), "-o", str(out), "--force", "--quiet", "--set", "processes=1"]
+    cmd += [arg for setting in settings for arg in ("--set", setting)]
     t0 = time.perf_counter()
     try:
         proc = subprocess.run(cmd, capture_output=True, text=True, timeout=RUN_TIMEOUT_S, check=False)
@@ -352,6 +354,10 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--output", "-o", type=Path, default=Path("gallery-out"))
     ap.add_argument("--workers", "-j", type=int, default=2, help="scans run at once (each in one process)")
     ap.add_argument("--rescore", action="store_true", help="score and draw the runs already in OUTPUT/runs without running meshplan again (time: plan.json's timings)")
+    ap.add_argument(
+        "--set", dest="settings", action="append", default=[], metavar="NAME=VALUE",
+        help="a parameter for every run (meshplan run --set), e.g. to see what a default's change does to every scan; repeatable",
+    )
     args = ap.parse_args(argv)
     if not args.scans.is_dir():
         print(f"error: {args.scans}: no such directory; give --scans (the real scans, ../shared/scans)", file=sys.stderr)
@@ -363,7 +369,7 @@ def main(argv: list[str] | None = None) -> int:
     def one(scan: Path) -> dict:
         if args.rescore:
             return previous_run(scan, args.output / "runs" / scan.stem)
-        res = {"scan": scan.name, **run_scan(scan, args.output / "runs" / scan.stem)}
+        res = {"scan": scan.name, **run_scan(scan, args.output / "runs" / scan.stem, tuple(args.settings))}
         print(f"{scan.name}: {res['status']} in {res['time_s']:.1f} s" + (f" ({res['error']})" if res["error"] else ""), file=sys.stderr, flush=True)
         return res
 

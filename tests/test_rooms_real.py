@@ -226,6 +226,35 @@ def test_a_straightened_side_stands_in_the_middle_of_the_fringe():
     assert 2.95 * 2.45 <= shape.area <= 3.1 * 2.6, shape.bounds
 
 
+def test_a_floor_hidden_along_a_side_by_a_desk_is_straightened():
+    """A 4 x 3 m room closed by its scanned floor, the floor hidden 0.6 m deep along 1.5 m of
+    one side (a desk against a wall the scan missed): the room is its 4 x 3 m rectangle, the
+    desk's depth within PlanParams.open_room_fit_m (at 0.3 m, before, the notch stayed)."""
+    piece = shapely.box(0, 0, 4, 3).difference(shapely.box(1.0, 2.4, 2.5, 3.0))
+    shape = straighten(piece, None, PlanParams().open_room_fit_m, 0.2)
+    assert len(shape.exterior.coords) == 5
+    assert shape.area == pytest.approx(12.0, abs=0.05)
+
+
+def test_a_straightened_room_keeps_its_floor_up_to_an_oblique_wall():
+    """A room whose floor was scanned up to a wall at 7.6 degrees to the plan's axes (from
+    (0, 2.0) to (3, 2.4)): straightened, its side runs along the axis; the floor between that
+    side and the wall stays the room's (rooms._along_walls), so that its outline holds to the
+    wall (which the energy model pairs across)."""
+    from meshplan.plan.rooms import _along_walls
+
+    piece = Polygon([(0, 0), (3, 0), (3, 2.4), (0, 2.0)])
+    wall = LineString([(0, 2.0), (3, 2.4)])
+    beyond = Polygon([(0, 2.0), (3, 2.4), (3, 5.0), (0, 5.0)])  # the next room, past the wall
+    rect = straighten(piece, beyond, PlanParams().open_room_fit_m, 0.2)
+    near_wall = shapely.Point(2.9, 2.33)  # floor 5 cm inside the wall, near its high end
+    assert not rect.contains(near_wall)  # the axis rectangle stops short of the wall there
+    shape = _along_walls(rect, piece, [wall], beyond)
+    assert shape.contains(near_wall)
+    assert shape.difference(piece).area <= 1e-3  # nothing past the wall
+    assert shape.area >= piece.area - 0.05  # the floor up to the wall, its corners' rounding aside
+
+
 def test_a_fragment_smaller_than_a_closet_disappears():
     """A 1 m2 scrap of floor that no wall closes, on its own, is dropped; one touching a room
     is merged into it."""

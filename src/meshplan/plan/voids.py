@@ -65,7 +65,9 @@ WALL_ABOVE_M = 1.2
 #: A stair's footprint and its void, grown by this (m), are the stair's opening, not a void.
 STAIR_CLEARANCE_M = 0.3
 #: The void is drawn as the rectangle it fills where that lies within this (m) of its raster
-#: outline (the rooms' ``open_room_fit_m``), else smoothed over this (m; a cell and a half).
+#: outline (three cells: a void's outline is the edge of the upper floor, which no furniture
+#: hides, unlike a room's floor: :attr:`meshplan.plan.params.PlanParams.open_room_fit_m`), else smoothed over this
+#: (m; a cell and a half).
 FIT_M, SMOOTH_M = 0.3, 0.15
 
 
