@@ -447,13 +447,16 @@ def _open_rooms(
     rooms = [p for p, _ in closed]
     small = [p for p in parts if p.area < params.min_fragment_area_m2]
     big = [p for p in parts if p.area >= params.min_fragment_area_m2]
+    band = None
     for piece in big:
         # beyond the walls around the piece: every other face of the arrangement
         others = [f for f in faces if f.area > 0 and not f.buffer(-INSIDE_M).intersects(piece.representative_point())]
         beyond = shapely.union_all([f.buffer(-SLIT_M, join_style="mitre") for f in others] + rooms) if others or rooms else None
         shape = straighten(piece, beyond, params.open_room_fit_m, FLOOR_FRINGE_M)
         if wall_lines:
-            shape = _along_walls(shape, piece, list(wall_lines), beyond)
+            if band is None:  # the same for every piece
+                band = _wall_band(list(wall_lines))
+            shape = _along_walls(shape, piece, band, beyond)
         # up to the walls, but not into another room (the faces beyond a wall the band
         # reaches are the band itself, between the floor's outline and the wall)
         if wall_normals is not None:
@@ -477,14 +480,18 @@ def _open_rooms(
     return result
 
 
-def _along_walls(shape: Polygon, piece: Polygon, walls: list[LineString], beyond) -> Polygon:
-    """``shape`` (``piece`` straightened) with the floor of ``piece`` it left out within
-    :data:`FLOOR_FRINGE_M` of a wall line (``beyond``: what lies past the walls, left out): the
-    rectangle's sides run along the plan's axes, while a wall the floor was scanned up to may
-    run at an angle (the outline of a room holds to its walls, which the energy model pairs
-    across, and the room is the floor up to its wall)."""
+def _wall_band(walls: list[LineString]):
+    """The strip within :data:`FLOOR_FRINGE_M` of the wall lines (for :func:`_along_walls`)."""
+    return shapely.union_all(shapely.buffer(np.asarray(walls, dtype=object), FLOOR_FRINGE_M, cap_style="flat"))
+
+
+def _along_walls(shape: Polygon, piece: Polygon, band, beyond) -> Polygon:
+    """``shape`` (``piece`` straightened) with the floor of ``piece`` it left out in ``band``
+    (within :data:`FLOOR_FRINGE_M` of a wall line, :func:`_wall_band`; ``beyond``: what lies
+    past the walls, left out): the rectangle's sides run along the plan's axes, while a wall the
+    floor was scanned up to may run at an angle (the outline of a room holds to its walls, which
+    the energy model pairs across, and the room is the floor up to its wall)."""
     core = smooth(piece, FLOOR_FRINGE_M)
-    band = shapely.union_all(shapely.buffer(shapely.get_parts(MultiLineString(walls)), FLOOR_FRINGE_M, cap_style="flat"))
     extra = core.intersection(band).difference(shape)
     if beyond is not None and not beyond.is_empty:
         extra = extra.difference(beyond)
