@@ -136,6 +136,16 @@ def in_process(path: Path, repeats: int = 3) -> None:
     record("slice + draw all plans (T_sd)", med["slice_draw"], 0.6, PAPER["slice_draw"], stages["slice_draw"])
     record("write (models, CAD, report)", med["write"], spread=stages["write"])
     record("pipeline total, in process", med["total"], None, PAPER["total"], stages["total"])
+    # the same stages computed alone: no files, so no drawing worker beside them on the other
+    # core (what a library caller asking for the result only gets; the paper's T_o and T_p
+    # were timed so)
+    alone: dict[str, list[float]] = {}
+    with load_meter(f"{repeats} in-process runs without files"):
+        for _ in range(repeats):
+            for k, v in meshplan.run(path, annotations=annotations).timings.items():
+                alone.setdefault(k, []).append(v)
+    for key, label in (("orient", "orient, computed alone (no files)"), ("rooms", "rooms + openings, computed alone")):
+        record(label, statistics.median(alone[key]), spread=alone[key])
     # slicing alone: 100 levels of one story
     st = r.orientation.stories[0]
     tri = r.mesh.triangles[r.orientation.face_story == 0]
