@@ -33,9 +33,9 @@ unit: $(STAMP)
 	$(BIN)/python -m pytest -n 2 -q -m "not slow and not realscan" tests
 
 # Gates: the linter (pyflakes, pycodestyle, isort, pyupgrade, bugbear, numpy docstrings) and the
-# type checker on the package (the linter on the tests too), both configured in pyproject.toml.
+# type checker on the package (the linter on the tests, scripts and benchmarks too), both configured in pyproject.toml.
 lint: $(STAMP)
-	$(BIN)/ruff check src tests
+	$(BIN)/ruff check src tests scripts benchmarks
 	$(BIN)/mypy
 
 # A plain `pip install meshplan` (the wheel and its declared dependencies, no extras) in a new

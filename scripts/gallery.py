@@ -236,7 +236,10 @@ def sheet_caption(report: dict | None) -> str:
             f"y = {s['truth_floor_in_plan_m']:.2f} m in the plan; gravity error {report['gravity_error_deg']:.1f} deg"
         )
     w, r, d = s0["walls"], s0["rooms"], s0["doors"]
-    return f"walls P {fmt(w['precision'])} R {fmt(w['recall'])} F1 {fmt(w['f1'])}, rooms R {fmt(r['recall'])} IoU {fmt(r['mean_iou'])}, doors R {fmt(d['recall'])}"
+    return (
+        f"walls P {fmt(w['precision'])} R {fmt(w['recall'])} F1 {fmt(w['f1'])}, "
+        f"rooms R {fmt(r['recall'])} IoU {fmt(r['mean_iou'])}, doors R {fmt(d['recall'])}"
+    )
 
 
 # ----------------------------------------------------------------------------------- summary
@@ -353,7 +356,10 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--truth", type=Path, default=Path("../shared/truth"))
     ap.add_argument("--output", "-o", type=Path, default=Path("gallery-out"))
     ap.add_argument("--workers", "-j", type=int, default=2, help="scans run at once (each in one process)")
-    ap.add_argument("--rescore", action="store_true", help="score and draw the runs already in OUTPUT/runs without running meshplan again (time: plan.json's timings)")
+    ap.add_argument(
+        "--rescore", action="store_true",
+        help="score and draw the runs already in OUTPUT/runs without running meshplan again (time: plan.json's timings)",
+    )
     ap.add_argument(
         "--set", dest="settings", action="append", default=[], metavar="NAME=VALUE",
         help="a parameter for every run (meshplan run --set), e.g. to see what a default's change does to every scan; repeatable",
