@@ -239,9 +239,10 @@ def test_a_floor_hidden_along_a_side_by_a_desk_is_straightened():
 def test_a_straightened_room_keeps_its_floor_up_to_an_oblique_wall():
     """A room whose floor was scanned up to a wall at 7.6 degrees to the plan's axes (from
     (0, 2.0) to (3, 2.4)): straightened, its side runs along the axis; the floor between that
-    side and the wall stays the room's (rooms._along_walls), so that its outline holds to the
-    wall (which the energy model pairs across)."""
-    from meshplan.plan.rooms import _along_walls, _wall_band
+    side and the wall stays the room's (straighten's ``hold``: the strip along the walls,
+    rooms.wall_band), so that its outline holds to the wall (which the energy model pairs
+    across)."""
+    from meshplan.plan.rooms import wall_band
 
     piece = Polygon([(0, 0), (3, 0), (3, 2.4), (0, 2.0)])
     wall = LineString([(0, 2.0), (3, 2.4)])
@@ -249,7 +250,7 @@ def test_a_straightened_room_keeps_its_floor_up_to_an_oblique_wall():
     rect = straighten(piece, beyond, PlanParams().open_room_fit_m, 0.2)
     near_wall = shapely.Point(2.9, 2.33)  # floor 5 cm inside the wall, near its high end
     assert not rect.contains(near_wall)  # the axis rectangle stops short of the wall there
-    shape = _along_walls(rect, piece, _wall_band([wall]), beyond)
+    shape = straighten(piece, beyond, PlanParams().open_room_fit_m, 0.2, hold=wall_band([wall]))
     assert shape.contains(near_wall)
     assert shape.difference(piece).area <= 1e-3  # nothing past the wall
     assert shape.area >= piece.area - 0.05  # the floor up to the wall, its corners' rounding aside

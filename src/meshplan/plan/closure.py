@@ -273,7 +273,7 @@ def _collinear_bridges(tan, nor, off, u_lo, u_hi, gap_m: float, collinear_m: flo
     return out
 
 
-def straighten(piece: Polygon, others, fit_m: float, smooth_m: float) -> Polygon:
+def straighten(piece: Polygon, others, fit_m: float, smooth_m: float, hold=None) -> Polygon:
     """``piece`` (a room closed by the scanned floor) as its bounding rectangle along the
     plan's axes, which are the walls' main directions, less ``others`` (what lies beyond the
     walls around it), when the rectangle's outline lies within ``fit_m`` of the piece's (their
@@ -284,7 +284,10 @@ def straighten(piece: Polygon, others, fit_m: float, smooth_m: float) -> Polygon
     The rectangle replaces the ragged edge of the scanned floor by straight lines, each side
     moved in from the floor's extreme reach to the middle of its fringe (where the floor covers
     half the side, :func:`_sides_on_the_floor`); ``fit_m`` bounds how far it reaches where no
-    floor was seen.
+    floor was seen. Within ``hold`` (the strip along the walls' lines) the smoothed floor the
+    rectangle leaves out stays: a wall the floor was scanned up to may run at an angle to the
+    rectangle's sides, and a room's outline holds to its walls (which the energy model pairs
+    across).
     """
     best = piece
     core = smooth(piece, smooth_m)  # spikes of the fringe set no rectangle's side
@@ -299,8 +302,31 @@ def straighten(piece: Polygon, others, fit_m: float, smooth_m: float) -> Polygon
         if rect.area > 0 and shapely.hausdorff_distance(rect.exterior, piece.exterior) <= fit_m and (best is piece or rect.area < best.area):
             best = Polygon(rect.exterior)
     if best is piece:
-        best = core
+        return core
+    if hold is not None:
+        best = _held(best, core, hold, others)
     return best
+
+
+def _held(rect: Polygon, core: Polygon, hold, others) -> Polygon:
+    """``rect`` with what of ``core`` lies in ``hold`` outside it (less ``others``), as one
+    polygon (see :func:`straighten`)."""
+    extra = core.intersection(hold).difference(rect)
+    if others is not None and not others.is_empty:
+        extra = extra.difference(others)
+    if extra.is_empty or extra.area <= 0:
+        return rect
+    merged = shapely.union_all([rect, extra.buffer(JOIN_M, join_style="mitre")]).buffer(-JOIN_M, join_style="mitre")
+    parts = [p for p in shapely.get_parts(merged) if isinstance(p, Polygon) and p.area > 0]
+    if not parts:
+        return rect
+    return Polygon(max(parts, key=lambda p: p.intersection(rect).area).exterior)
+
+
+#: Pieces of floor added to a straightened room are grown by this (m) and the union shrunk back,
+#: so that pieces meeting the rectangle along an edge join it (0.1 mm: below any drawing's
+#: resolution, above the rounding of the coordinates).
+JOIN_M = 1e-4
 
 
 #: Step (m) by which a side of a straightened room is moved in from the floor's extreme reach:

@@ -45,7 +45,7 @@ from ..geometry import FloatArray, Mesh
 from ..orient import Orientation, Story, slab_faces
 from ..units import FOOT_M
 from ..walls import FlatWalls
-from .closure import MIN_MEETING_ANGLE_DEG, NODE_OVERSHOOT_M, close_walls, end_crossings, reach_walls, run_to_boundary, smooth, straighten
+from .closure import MIN_MEETING_ANGLE_DEG, NODE_OVERSHOOT_M, close_walls, end_crossings, reach_walls, run_to_boundary, straighten
 from .params import PlanParams
 
 #: Where the scanned floor closes a room, its outline loses notches and spikes narrower than
@@ -452,11 +452,9 @@ def _open_rooms(
         # beyond the walls around the piece: every other face of the arrangement
         others = [f for f in faces if f.area > 0 and not f.buffer(-INSIDE_M).intersects(piece.representative_point())]
         beyond = shapely.union_all([f.buffer(-SLIT_M, join_style="mitre") for f in others] + rooms) if others or rooms else None
-        shape = straighten(piece, beyond, params.open_room_fit_m, FLOOR_FRINGE_M)
-        if wall_lines:
-            if band is None:  # the same for every piece
-                band = _wall_band(list(wall_lines))
-            shape = _along_walls(shape, piece, band, beyond)
+        if wall_lines and band is None:  # the same for every piece
+            band = wall_band(list(wall_lines))
+        shape = straighten(piece, beyond, params.open_room_fit_m, FLOOR_FRINGE_M, hold=band)
         # up to the walls, but not into another room (the faces beyond a wall the band
         # reaches are the band itself, between the floor's outline and the wall)
         if wall_normals is not None:
@@ -480,28 +478,10 @@ def _open_rooms(
     return result
 
 
-def _wall_band(walls: list[LineString]):
-    """The strip within :data:`FLOOR_FRINGE_M` of the wall lines (for :func:`_along_walls`)."""
+def wall_band(walls: list[LineString]):
+    """The strip within :data:`FLOOR_FRINGE_M` of the wall lines, where a straightened room
+    keeps its floor (:func:`meshplan.plan.closure.straighten`'s ``hold``)."""
     return shapely.union_all(shapely.buffer(np.asarray(walls, dtype=object), FLOOR_FRINGE_M, cap_style="flat"))
-
-
-def _along_walls(shape: Polygon, piece: Polygon, band, beyond) -> Polygon:
-    """``shape`` (``piece`` straightened) with the floor of ``piece`` it left out in ``band``
-    (within :data:`FLOOR_FRINGE_M` of a wall line, :func:`_wall_band`; ``beyond``: what lies
-    past the walls, left out): the rectangle's sides run along the plan's axes, while a wall the
-    floor was scanned up to may run at an angle (the outline of a room holds to its walls, which
-    the energy model pairs across, and the room is the floor up to its wall)."""
-    core = smooth(piece, FLOOR_FRINGE_M)
-    extra = core.intersection(band).difference(shape)
-    if beyond is not None and not beyond.is_empty:
-        extra = extra.difference(beyond)
-    if extra.is_empty or extra.area <= 0:
-        return shape
-    merged = shapely.union_all([shape, extra.buffer(SLIT_M, join_style="mitre")]).buffer(-SLIT_M, join_style="mitre")
-    parts = [p for p in shapely.get_parts(merged) if isinstance(p, Polygon) and p.area > 0]
-    if not parts:
-        return shape
-    return Polygon(max(parts, key=lambda p: p.intersection(shape).area).exterior)
 
 
 def _parts(shape, params: PlanParams) -> list[Polygon]:

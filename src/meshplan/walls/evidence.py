@@ -411,12 +411,7 @@ def work_surface_height(raster: StoryRaster, start: FloatArray, end: FloatArray,
     the desk or the counter against it."""
     if not len(start):
         return np.zeros(0)
-    step = RASTER_M / 2
-    along = (np.arange(8) + 0.5) / 8
-    across = np.arange(TOP_SEARCH_M[0] - RASTER_M / 2 + step, TOP_SEARCH_M[1] + 1e-9, step)
-    p = start[:, None, None, :] + along[None, :, None, None] * (end - start)[:, None, None, :]
-    p = p + across[None, None, :, None] * normal[:, None, None, :]
-    h = raster.sample(raster.shelf, p[..., 0], p[..., 1], np.nan).reshape(len(start), -1)
+    h = _behind(raster, raster.shelf, np.nan, start, end, -normal, TOP_SEARCH_M[0] - RASTER_M / 2, TOP_SEARCH_M[1]).reshape(len(start), -1)
     with np.errstate(invalid="ignore"):
         h = np.where(_at_work_height(h, floor, work_surface_m), h, np.nan)
     out = np.full(len(start), np.nan)
@@ -452,15 +447,22 @@ def _share_behind(
     it, beyond ``thickness_m`` and within ``depth_m`` (8 samples along each face)."""
     if not len(start):
         return np.zeros(0)
+    hit = _behind(raster, grid, -np.inf, start, end, normal, thickness_m, depth_m) >= at_least
+    return hit.any(axis=2).mean(axis=1) if hit.shape[2] else np.zeros(len(start))
+
+
+def _behind(
+    raster: StoryRaster, grid: FloatArray, outside: float, start: FloatArray, end: FloatArray, normal: FloatArray, thickness_m: float, depth_m: float
+) -> FloatArray:
+    """``(W, 8, depth)`` values of ``grid`` behind each face (``outside`` beyond the raster): 8
+    samples along it, each at every :data:`RASTER_M` / 2 beyond ``thickness_m`` and within
+    ``depth_m`` on the side ``normal`` points away from."""
     step = RASTER_M / 2
     along = (np.arange(8) + 0.5) / 8  # samples along each face
     behind = np.arange(thickness_m + step, depth_m + 1e-9, step)
-    if not len(behind):
-        return np.zeros(len(start))
     p = start[:, None, None, :] + along[None, :, None, None] * (end - start)[:, None, None, :]
     p = p - behind[None, None, :, None] * normal[:, None, None, :]
-    hit = raster.sample(grid, p[..., 0], p[..., 1], -np.inf) >= at_least  # (W, 8, depth)
-    return hit.any(axis=2).mean(axis=1)
+    return raster.sample(grid, p[..., 0], p[..., 1], outside)
 
 
 def hidden_behind(cols: Columns, context_m: float, thickness_m: float, work_surface_m: float) -> np.ndarray:
